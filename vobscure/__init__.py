@@ -1,0 +1,38 @@
+"""vobscure: a reference library for ambient occlusion, obscurance and Volumetric Obscurance.
+
+The public API is listed in ``__all__``; see ``docs/`` and DESIGN.md for the conventions
+(view space z positive in front of the camera, visibility 1 = open, NaN on background).
+"""
+
+from importlib.metadata import PackageNotFoundError, version as _version
+
+from . import scenes
+from .camera import Camera
+from .estimate import Estimate
+from .gbuffer import GBuffer, render_gbuffer
+from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric_obscurance
+from .metrics import ErrorReport, error
+from .raytrace import Tracer
+from .scenes import Scene
+
+try:
+    __version__ = _version("vobscure")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.0.0+unknown"
+
+__all__ = [
+    "Camera",
+    "ErrorReport",
+    "Estimate",
+    "GBuffer",
+    "Scene",
+    "Tracer",
+    "__version__",
+    "ambient_occlusion",
+    "error",
+    "ground_truth",
+    "obscurance",
+    "render_gbuffer",
+    "scenes",
+    "volumetric_obscurance",
+]

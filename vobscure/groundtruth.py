@@ -1,0 +1,494 @@
+"""Ray-cast ground truth: ambient occlusion, obscurance and world-space Volumetric Obscurance.
+
+Every estimator in vobscure is measured against these references, so each returns an
+:class:`~vobscure.estimate.Estimate` whose ``stderr`` is honest for the sampler used.
+
+Sampling
+--------
+Randomized quasi-Monte Carlo. A scrambled Sobol' base set of ``m`` points is drawn once per
+call; every query point gets ``groups`` independent uniform shifts of it (Cranley-Patterson
+rotations, modulo 1), so its ``groups * m`` samples form ``groups`` independent, unbiased
+estimates. The value is their mean and the standard error is their standard deviation over
+sqrt(groups): a Student-t quantity with ``groups - 1`` degrees of freedom. Rays of one point
+are contiguous in memory, which keeps Embree's traversal coherent.
+
+All functions accept a :class:`~vobscure.scenes.Scene` or a ``trimesh.Trimesh``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import trimesh
+from tqdm.auto import tqdm
+
+from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
+from .estimate import Estimate
+from .raytrace import CHUNK_RAYS, parallel_map
+from .sampling import (cube_to_uniform_ball, sobol_base, square_to_cosine_hemisphere,
+                       square_to_uniform_hemisphere, to_world)
+from .scenes import Scene
+
+__all__ = ["ambient_occlusion", "obscurance", "volumetric_obscurance", "ground_truth",
+           "OBSCURANCE_FALLOFFS", "VO_FALLOFFS", "DEFAULT_GROUPS"]
+
+#: Independent randomizations per point; the stderr has DEFAULT_GROUPS - 1 degrees of freedom.
+DEFAULT_GROUPS = 8
+
+_WARPS = {"cosine": square_to_cosine_hemisphere, "uniform": square_to_uniform_hemisphere}
+
+
+def _linear(t):
+    return t
+
+
+def _smooth(t):
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _step(t):
+    return np.zeros_like(t)
+
+
+#: rho(t) for t = d / radius in [0, 1); rho = 1 for t >= 1 and for misses (RTR Sec. 9.2.3).
+OBSCURANCE_FALLOFFS: dict[str, Callable] = {"step": _step, "linear": _linear, "smooth": _smooth}
+
+#: Loos & Sloan 2010 Sec. 4: rho(r) on the ball, r = |x - P| / radius, with the integral of
+#: rho over the unit ball divided by the ball's volume (the normalization of the weights).
+VO_FALLOFFS = {
+    "constant": (lambda r2: np.ones_like(r2), 1.0),
+    # 1 - r^2: integral 4 pi (1/3 - 1/5) = 8 pi / 15 over the ball's 4 pi / 3 -> 2/5.
+    "quadratic": (lambda r2: 1.0 - r2, 2.0 / 5.0),
+}
+
+
+def _as_scene(scene) -> Scene:
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, trimesh.Trimesh):
+        return Scene(scene)
+    raise ValueError(f"scene must be a vobscure Scene or a trimesh.Trimesh, got {type(scene).__name__}")
+
+
+def _groups(count: int, groups: int, name: str) -> tuple[int, int]:
+    """Split ``count`` samples into ``g`` groups of ``m`` (count rounded up to g * m)."""
+    g = min(check_int(groups, "groups", minimum=2), count)
+    if count < 2:
+        raise ValueError(f"{name} must be >= 2 (the standard error needs two randomizations), got {count}")
+    return g, -(-count // g)
+
+
+def _run_groups(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress, desc,
+                extra_dim: int = 0):
+    """Evaluate ``kernel(index_slice, u, child_rng)`` over chunks of points.
+
+    ``u`` is (P, g, m, dim) RQMC points for the chunk's P points. The kernel returns
+    (P, g) group means, or a tuple whose first entry is that and whose second is a
+    (P, extra_dim) per-point extra (summed bent-normal directions).
+    """
+    base = sobol_base(dim, m, rng)
+    shifts = rng.random((n, g, dim))
+    per_chunk = max(1, CHUNK_RAYS * 2 // (g * m))
+    chunks = [slice(i, min(i + per_chunk, n)) for i in range(0, n, per_chunk)]
+    child = rng.spawn(len(chunks))
+
+    def work(k):
+        s = chunks[k]
+        u = base[None, None, :, :] + shifts[s][:, :, None, :]
+        u -= np.floor(u)
+        return kernel(s, u, child[k])
+
+    bar = tqdm(total=len(chunks), desc=desc, unit="chunk", disable=not progress, leave=False)
+    try:
+        results = parallel_map(work, range(len(chunks)), threads=threads, progress=bar)
+    finally:
+        bar.close()
+    means = np.concatenate([r[0] if isinstance(r, tuple) else r for r in results]) if n else np.zeros((0, g))
+    extra = None
+    if extra_dim:
+        extra = np.concatenate([r[1] for r in results]) if n else np.zeros((0, extra_dim))
+    value = means.mean(axis=1)
+    stderr = means.std(axis=1, ddof=1) / np.sqrt(g)
+    return value, stderr, extra
+
+
+def _hemisphere_rays(tracer, points, normals, offset_normals, u, weighting):
+    local = _WARPS[weighting](u.reshape(len(points), -1, 2))          # (P, R, 3)
+    dirs = to_world(local, normals)                                  # (P, R, 3)
+    origins = tracer.offset_origins(points, offset_normals)          # (P, 3)
+    origins = np.broadcast_to(origins[:, None, :], dirs.shape)
+    return origins.reshape(-1, 3), dirs.reshape(-1, 3), dirs
+
+
+def _ao(scene, points, normals, offset_normals, *, rays, weighting, max_distance, seed,
+        bent_normals, groups, threads, progress, desc="ambient occlusion"):
+    tracer = scene.tracer
+    g, m = _groups(rays, groups, "rays")
+    rng = as_rng(seed)
+
+    def kernel(s, u, _rng):
+        o, d, dirs = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], u, weighting)
+        free = ~tracer.occluded(o, d, max_distance, threads=1)
+        free = free.reshape(u.shape[0], g, m)
+        means = free.mean(axis=2)
+        if not bent_normals:
+            return means
+        # RTR 3rd ed. Sec. 9.2.1: the bent normal is the mean unoccluded direction.
+        summed = np.einsum("pr,prk->pk", free.reshape(u.shape[0], -1).astype(float), dirs)
+        return means, summed
+
+    value, stderr, summed = _run_groups(kernel, len(points), g, m, 2, rng, threads=threads,
+                                        progress=progress, desc=desc, extra_dim=3 if bent_normals else 0)
+    bent = None
+    if bent_normals:
+        length = np.linalg.norm(summed, axis=1, keepdims=True)
+        # where every ray is blocked the direction is undefined: fall back to the normal
+        bent = np.where(length > 0, summed / np.where(length > 0, length, 1.0), normals)
+    return Estimate(value=value, stderr=stderr, samples=g * m, bent_normal=bent)
+
+
+def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str = "cosine",
+                      max_distance: float = np.inf, seed=0, bent_normals: bool = False,
+                      groups: int = DEFAULT_GROUPS, threads: int | None = None,
+                      progress: bool = False) -> Estimate:
+    r"""Ambient occlusion k_A at surface points by ray casting (visibility: 1 = open).
+
+    .. math:: k_A(p) = \frac{1}{\pi} \int_\Omega v(p, l) \cos\theta \, d\omega
+
+    (RTR 3rd ed. Sec. 9.2, Eq. 9.14), or the unweighted hemisphere average
+    :math:`\frac{1}{2\pi}\int_\Omega v \, d\omega` with ``weighting="uniform"``. v is 0 where
+    the ray hits geometry within ``max_distance``.
+
+    Parameters
+    ----------
+    scene : Scene or trimesh.Trimesh
+    points : (n, 3) float
+        Surface points, world space.
+    normals : (n, 3) float
+        Unit normals on the open side (renormalized). Rays start ``tracer.offset`` along
+        them (:mod:`vobscure.raytrace`).
+    rays : int
+        Rays per point, rounded up to a multiple of ``groups``.
+    weighting : {"cosine", "uniform"}
+    max_distance : float
+        Ray length limit (inf: any hit occludes).
+    seed : int, Generator or None
+    bent_normals : bool
+        Also return the bent normals (the normalized mean unoccluded direction, RTR 9.2.1).
+    groups : int
+        Independent randomizations (stderr degrees of freedom + 1).
+    threads : int, optional
+    progress : bool
+        Show a tqdm progress bar.
+
+    Returns
+    -------
+    Estimate
+        ``value`` and ``stderr`` of shape (n,); ``bent_normal`` (n, 3) if requested
+        (equal to the normal where every ray was blocked).
+
+    References
+    ----------
+    Akenine-Moller, Haines & Hoffman, Real-Time Rendering 3rd ed., Sec. 9.2, Eq. 9.14.
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> e = vo.ambient_occlusion(vo.scenes.slab(), [[0, 0, 0]], [[0, 1, 0]], rays=64)
+    >>> float(e.value[0]), float(e.stderr[0])
+    (1.0, 0.0)
+    """
+    scene = _as_scene(scene)
+    points = as_points(points, "points")
+    normals = as_unit_vectors(normals, "normals", count=len(points))
+    rays = check_int(rays, "rays", minimum=2)
+    check_choice(weighting, "weighting", _WARPS)
+    max_distance = check_positive(max_distance, "max_distance", allow_inf=True)
+    return _ao(scene, points, normals, normals, rays=rays, weighting=weighting,
+               max_distance=max_distance, seed=seed, bent_normals=bool(bent_normals),
+               groups=groups, threads=threads, progress=progress)
+
+
+def _rho(falloff):
+    if callable(falloff):
+        return falloff
+    check_choice(falloff, "falloff", list(OBSCURANCE_FALLOFFS) + ["<callable>"])
+    return OBSCURANCE_FALLOFFS[falloff]
+
+
+def _obscurance(scene, points, normals, offset_normals, *, radius, falloff, rays, weighting,
+                seed, groups, threads, progress, desc="obscurance"):
+    tracer = scene.tracer
+    rho = _rho(falloff)
+    g, m = _groups(rays, groups, "rays")
+    rng = as_rng(seed)
+
+    def kernel(s, u, _rng):
+        o, d, _ = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], u, weighting)
+        hits = tracer.intersect(o, d, radius, threads=1)
+        t = hits.distance / radius
+        value = np.ones_like(t)
+        hit = hits.hit & (t < 1.0)
+        # RTR 3rd ed. Sec. 9.2.3, Eq. 9.21: rho(d) replaces the binary visibility v(l)
+        rho_t = np.asarray(rho(t[hit]), dtype=float)
+        if rho_t.shape != t[hit].shape or np.any(~np.isfinite(rho_t)) or np.any((rho_t < 0) | (rho_t > 1)):
+            raise ValueError("falloff must map distances d / radius in [0, 1) to finite values in [0, 1], "
+                             "elementwise on an array")
+        value[hit] = rho_t
+        return value.reshape(u.shape[0], g, m).mean(axis=2)
+
+    value, stderr, _ = _run_groups(kernel, len(points), g, m, 2, rng, threads=threads,
+                                   progress=progress, desc=desc)
+    return Estimate(value=value, stderr=stderr, samples=g * m)
+
+
+def obscurance(scene, points, normals, *, radius: float, falloff="linear", rays: int = 256,
+               weighting: str = "cosine", seed=0, groups: int = DEFAULT_GROUPS,
+               threads: int | None = None, progress: bool = False) -> Estimate:
+    r"""Zhukov obscurance at surface points by ray casting.
+
+    .. math:: W(p) = \frac{1}{\pi} \int_\Omega \rho(d(p, l)) \cos\theta \, d\omega
+
+    (RTR 3rd ed. Sec. 9.2.3, Eq. 9.21; Loos & Sloan 2010 Sec. 3), where d is the distance to
+    the first hit and rho rises from 0 at d = 0 to 1 at d >= ``radius`` (and for misses).
+
+    Parameters
+    ----------
+    scene : Scene or trimesh.Trimesh
+    points, normals : (n, 3) float
+    radius : float
+        d_max: the distance beyond which geometry no longer obscures.
+    falloff : {"linear", "smooth", "step"} or callable
+        rho as a function of t = d / radius on [0, 1): ``"linear"`` t, ``"smooth"``
+        3t^2 - 2t^3, ``"step"`` 0 (obscurance then equals AO with ``max_distance=radius``),
+        or a vectorized callable returning values in [0, 1].
+    rays, weighting, seed, groups, threads, progress
+        As in :func:`ambient_occlusion`.
+
+    Returns
+    -------
+    Estimate
+        (n,) value and stderr.
+
+    References
+    ----------
+    Zhukov, Iones & Kronin, "An ambient light illumination model", EGWR 1998; RTR 3rd ed.
+    Sec. 9.2.3, Eq. 9.21.
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> e = vo.obscurance(vo.scenes.slab(), [[0, 0, 0]], [[0, 1, 0]], radius=0.5, rays=64)
+    >>> float(e.value[0])
+    1.0
+    """
+    scene = _as_scene(scene)
+    points = as_points(points, "points")
+    normals = as_unit_vectors(normals, "normals", count=len(points))
+    radius = check_positive(radius, "radius")
+    rays = check_int(rays, "rays", minimum=2)
+    check_choice(weighting, "weighting", _WARPS)
+    return _obscurance(scene, points, normals, normals, radius=radius, falloff=falloff, rays=rays,
+                       weighting=weighting, seed=seed, groups=groups, threads=threads,
+                       progress=progress)
+
+
+def _check_closed(scene: Scene, allow_open: bool) -> None:
+    if allow_open or scene.is_watertight:
+        return
+    bad = [k for k, m in scene.meshes.items() if not (m.is_watertight and m.is_winding_consistent)]
+    raise ValueError(
+        f"volumetric obscurance needs closed, consistently wound meshes to tell inside from outside; "
+        f"mesh(es) {bad} are not. Repair them (e.g. trimesh.repair.fill_holes) or pass "
+        f"allow_open=True to accept an inside test that may be wrong near the holes.")
+
+
+def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes, groups,
+                threads, progress, desc="volumetric obscurance"):
+    tracer = scene.tracer
+    rho, rho_mean = VO_FALLOFFS[falloff]
+    # antithetic pairs: each base point x also gives -x, so m base points make 2 m samples
+    g, m2 = _groups(samples, groups, "samples")
+    m = max(1, -(-m2 // 2))
+    rng = as_rng(seed)
+    face_normals = tracer.face_normals
+
+    def kernel(s, u, child):
+        P = u.shape[0]
+        x = cube_to_uniform_ball(u)                                    # (P, g, m, 3), unit ball
+        x = np.concatenate([x, -x], axis=2)                            # (P, g, 2m, 3)
+        if normals is not None:
+            # Loos & Sloan Sec. 4.4: the half-ball on the normal's side; reflecting the
+            # samples below the tangent plane keeps them uniform on the half-ball.
+            n = normals[s][:, None, None, :]
+            dn = np.sum(x * n, axis=-1, keepdims=True)
+            x = x - 2.0 * np.minimum(dn, 0.0) * n
+        r2 = np.sum(x * x, axis=-1)
+        world = points[s][:, None, None, :] + radius * x
+        q = world.reshape(-1, 3)
+        # Inside test: a point is inside a closed, outward-wound solid when the first
+        # surface a ray from it meets faces away from it (the ray is leaving). Majority
+        # of `votes` rays in independent random directions.
+        dirs = child.normal(size=(votes, len(q), 3))
+        dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+        inside_votes = np.zeros(len(q), dtype=np.int32)
+        for v in range(votes):
+            hits = tracer.intersect(q, dirs[v], threads=1)
+            hit = hits.hit
+            leaving = np.zeros(len(q), dtype=bool)
+            leaving[hit] = np.einsum("ij,ij->i", face_normals[hits.primitive[hit]], dirs[v][hit]) > 0
+            inside_votes += leaving
+        occupied = (inside_votes * 2 > votes).reshape(P, g, 2 * m)
+        # Loos & Sloan 2010 Sec. 4, V(P) = int_X rho(d(P, x)) O(x) dx, normalized by int_X rho
+        w = rho(r2) / rho_mean
+        return np.mean(w * ~occupied, axis=2)
+
+    value, stderr, _ = _run_groups(kernel, len(points), g, m, 3, rng, threads=threads,
+                                   progress=progress, desc=desc)
+    return Estimate(value=value, stderr=stderr, samples=g * 2 * m)
+
+
+def volumetric_obscurance(scene, points, normals=None, *, radius: float, samples: int = 4096,
+                          falloff: str = "constant", seed=0, votes: int = 3,
+                          allow_open: bool = False, groups: int = DEFAULT_GROUPS,
+                          threads: int | None = None, progress: bool = False) -> Estimate:
+    r"""World-space Volumetric Obscurance: the unoccupied fraction of a ball around each point.
+
+    .. math:: V(P) = \int_X \rho(d(P, x)) O(x) \, dx \Big/ \int_X \rho(d(P, x)) \, dx
+
+    (Loos & Sloan 2010, Sec. 4), X the ball of ``radius`` around P, or the half-ball on the
+    normal's side when ``normals`` are given (Sec. 4.4); O is 1 in empty space and 0
+    inside a solid. A point on a flat open surface has V = 0.5 (1.0 with normals).
+
+    Parameters
+    ----------
+    scene : Scene or trimesh.Trimesh
+        Closed, consistently wound, non-interpenetrating solids.
+    points : (n, 3) float
+    normals : (n, 3) float, optional
+        Restrict to the half-ball on the normal's side.
+    radius : float
+    samples : int
+        Points per ball (antithetic pairs x, -x; rounded up to a multiple of 2 * groups).
+    falloff : {"constant", "quadratic"}
+        rho = 1 (the paper's choice) or 1 - (d / radius)^2 (its other candidate).
+    seed : int, Generator or None
+    votes : int
+        Odd number of rays per inside test (majority vote).
+    allow_open : bool
+        Accept meshes that are not closed (the inside test may then be wrong).
+    groups, threads, progress
+        As in :func:`ambient_occlusion`.
+
+    Returns
+    -------
+    Estimate
+        (n,) value and stderr.
+
+    References
+    ----------
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4 and 4.4.
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> e = vo.volumetric_obscurance(vo.scenes.slab(), [[0, 0, 0]], radius=0.5, samples=256)
+    >>> float(e.value[0])
+    0.5
+    """
+    scene = _as_scene(scene)
+    points = as_points(points, "points")
+    if normals is not None:
+        normals = as_unit_vectors(normals, "normals", count=len(points))
+    radius = check_positive(radius, "radius")
+    samples = check_int(samples, "samples", minimum=2)
+    check_choice(falloff, "falloff", VO_FALLOFFS)
+    votes = check_int(votes, "votes")
+    if votes % 2 == 0:
+        raise ValueError(f"votes must be odd so that a majority exists, got {votes}")
+    _check_closed(scene, allow_open)
+    return _volumetric(scene, points, normals, radius=radius, samples=samples, falloff=falloff,
+                       seed=seed, votes=votes, groups=groups, threads=threads, progress=progress)
+
+
+QUANTITIES = ("ao", "obscurance", "volumetric")
+
+
+def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None = None,
+                 rays: int = 256, samples: int = 4096, falloff=None, weighting: str = "cosine",
+                 normal_clamp: bool = False, seed=0, progress: bool = True,
+                 groups: int = DEFAULT_GROUPS, threads: int | None = None,
+                 allow_open: bool = False) -> Estimate:
+    """The ray-cast reference at every pixel of a G-buffer.
+
+    Parameters
+    ----------
+    scene : Scene or trimesh.Trimesh
+        The scene the G-buffer was rendered from.
+    gbuffer : GBuffer
+    quantity : {"ao", "obscurance", "volumetric"}
+        ``"ao"``: :func:`ambient_occlusion` with ``max_distance=radius`` (inf when radius is
+        None); ``"obscurance"``: :func:`obscurance` (radius required, ``falloff`` default
+        "linear"); ``"volumetric"``: :func:`volumetric_obscurance` (radius required,
+        ``falloff`` default "constant", the half-ball when ``normal_clamp``).
+    radius : float, optional
+    rays : int
+        Rays per pixel (ao, obscurance).
+    samples : int
+        Points per ball (volumetric).
+    falloff, weighting, normal_clamp, seed, groups, threads, allow_open
+        Passed on.
+    progress : bool
+        A tqdm progress bar (default on).
+
+    Returns
+    -------
+    Estimate
+        (H, W) value and stderr, NaN on background pixels.
+
+    Notes
+    -----
+    Hemispheres are centred on the G-buffer's world-space shading normal; rays start off
+    the surface along the geometric normal (facing the camera), so that shading normals
+    never put an origin inside the surface.
+    """
+    from .gbuffer import GBuffer
+
+    scene = _as_scene(scene)
+    if not isinstance(gbuffer, GBuffer):
+        raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
+    check_choice(quantity, "quantity", QUANTITIES)
+    if radius is not None:
+        radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
+    elif quantity != "ao":
+        raise ValueError(f"radius is required for quantity={quantity!r}")
+    valid = gbuffer.valid
+    points = gbuffer.world_position[valid]
+    normals = gbuffer.world_normal[valid]
+    geo = gbuffer.world_geometric_normal[valid]
+    desc = f"ground truth ({quantity})"
+    if quantity == "ao":
+        check_choice(weighting, "weighting", _WARPS)
+        est = _ao(scene, points, normals, geo, rays=check_int(rays, "rays", minimum=2),
+                  weighting=weighting, max_distance=np.inf if radius is None else radius, seed=seed,
+                  bent_normals=False, groups=groups, threads=threads, progress=progress, desc=desc)
+    elif quantity == "obscurance":
+        check_choice(weighting, "weighting", _WARPS)
+        est = _obscurance(scene, points, normals, geo, radius=radius,
+                          falloff="linear" if falloff is None else falloff,
+                          rays=check_int(rays, "rays", minimum=2), weighting=weighting, seed=seed,
+                          groups=groups, threads=threads, progress=progress, desc=desc)
+    else:
+        falloff = "constant" if falloff is None else falloff
+        check_choice(falloff, "falloff", VO_FALLOFFS)
+        _check_closed(scene, allow_open)
+        est = _volumetric(scene, points, normals if normal_clamp else None, radius=radius,
+                          samples=check_int(samples, "samples", minimum=2), falloff=falloff,
+                          seed=seed, votes=3, groups=groups, threads=threads, progress=progress,
+                          desc=desc)
+    value = np.full(valid.shape, np.nan)
+    stderr = np.full(valid.shape, np.nan)
+    value[valid] = est.value
+    stderr[valid] = est.stderr
+    return Estimate(value=value, stderr=stderr, samples=est.samples)

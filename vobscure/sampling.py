@@ -1,0 +1,78 @@
+"""Sampling warps and randomized quasi-Monte Carlo point sets.
+
+Warps are named ``source_to_target`` as in Mitsuba 3 (``warp.h``), each with its pdf where
+one is needed. The RQMC scheme gives every ground-truth estimate an honest standard error:
+one scrambled Sobol' base set is shared by all points, and each point gets ``groups``
+independent uniform random shifts of it (Cranley-Patterson rotations). Each shifted set is
+an unbiased estimator; the spread of the ``groups`` group means gives the standard error.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import qmc
+
+__all__ = [
+    "square_to_cosine_hemisphere",
+    "square_to_uniform_hemisphere",
+    "cube_to_uniform_ball",
+    "tangent_frame",
+    "to_world",
+    "sobol_base",
+]
+
+
+def square_to_cosine_hemisphere(u: np.ndarray) -> np.ndarray:
+    """(..., 2) uniform in [0, 1)^2 -> (..., 3) unit vectors on the z >= 0 hemisphere, pdf cos(theta)/pi.
+
+    Malley's method: uniform on the unit disk (polar map r = sqrt(u0)), lifted to the hemisphere.
+    """
+    r = np.sqrt(u[..., 0])
+    phi = 2.0 * np.pi * u[..., 1]
+    z = np.sqrt(np.maximum(0.0, 1.0 - u[..., 0]))
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+def square_to_uniform_hemisphere(u: np.ndarray) -> np.ndarray:
+    """(..., 2) uniform in [0, 1)^2 -> (..., 3) unit vectors on the z >= 0 hemisphere, pdf 1/(2 pi)."""
+    z = u[..., 0]
+    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = 2.0 * np.pi * u[..., 1]
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+def cube_to_uniform_ball(u: np.ndarray) -> np.ndarray:
+    """(..., 3) uniform in [0, 1)^3 -> (..., 3) uniform in the unit ball (volume preserving)."""
+    r = np.cbrt(u[..., 0])
+    z = 1.0 - 2.0 * u[..., 1]
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = 2.0 * np.pi * u[..., 2]
+    return r[..., None] * np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+
+
+def tangent_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit tangents (t, b) with (t, b, n) right-handed orthonormal, for unit (..., 3) n.
+
+    The branchless construction of Duff et al., "Building an Orthonormal Basis, Revisited",
+    JCGT 6(1), 2017, Listing 3.
+    """
+    sign = np.where(n[..., 2] >= 0.0, 1.0, -1.0)
+    a = -1.0 / (sign + n[..., 2])
+    b = n[..., 0] * n[..., 1] * a
+    t = np.stack([1.0 + sign * n[..., 0] ** 2 * a, sign * b, -sign * n[..., 0]], axis=-1)
+    bb = np.stack([b, sign + n[..., 1] ** 2 * a, -n[..., 1]], axis=-1)
+    return t, bb
+
+
+def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Rotate (P, k, 3) local vectors (z along the normal) into the frames of (P, 3) normals."""
+    t, b = tangent_frame(n)
+    return (local[..., 0:1] * t[:, None, :] + local[..., 1:2] * b[:, None, :]
+            + local[..., 2:3] * n[:, None, :])
+
+
+def sobol_base(dim: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    """(n, dim) scrambled Sobol' points (n rounded up to a power of two, then truncated)."""
+    m = max(1, int(np.ceil(np.log2(max(n, 1)))))
+    engine = qmc.Sobol(d=dim, scramble=True, seed=rng)
+    return engine.random_base2(m)[:n]
