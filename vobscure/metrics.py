@@ -69,7 +69,8 @@ def error(estimate, reference, *, mask=None) -> ErrorReport:
     -----
     SSIM is computed on the full images with the ignored pixels of ``estimate`` replaced by
     the reference (so they add no dissimilarity) and the local SSIM map averaged over the
-    compared pixels only. With no pixel to compare every error is NaN and ``pixels`` is 0.
+    compared pixels only, without the border where the window is clipped (as
+    scikit-image's mean SSIM does, which this equals when no pixel is ignored). With no pixel to compare every error is NaN and ``pixels`` is 0.
 
     Examples
     --------
@@ -113,4 +114,9 @@ def _masked_ssim(est, ref, use) -> float:
     ref_f = np.where(use, ref, 0.0)
     est_f = np.where(use, est, ref_f)
     _, smap = structural_similarity(est_f, ref_f, data_range=1.0, win_size=win, full=True)
-    return float(np.mean(smap[use]))
+    # like scikit-image's mean SSIM, leave out the border where the window is clipped
+    pad = (win - 1) // 2
+    inner = np.zeros_like(use)
+    inner[pad:use.shape[0] - pad, pad:use.shape[1] - pad] = True
+    inner &= use
+    return float(np.mean(smap[inner])) if inner.any() else float("nan")

@@ -79,8 +79,9 @@ class Scene:
         self.triangles = np.concatenate([m.triangles for m in clean.values()]).astype(np.float64)
         normals = np.concatenate([m.face_normals for m in clean.values()]).astype(np.float64)
         self.face_normals = normals
-        angles = {k: (smooth_angle.get(k, 60.0) if isinstance(smooth_angle, Mapping) else smooth_angle)
+        angles = {k: float(smooth_angle.get(k, 60.0) if isinstance(smooth_angle, Mapping) else smooth_angle)
                   for k in clean}
+        self.smooth_angle: dict[str, float] = angles
         self.corner_normals = np.concatenate(
             [_corner_normals(m, angles[k]) for k, m in clean.items()]).astype(np.float64)
         self.mesh_index = np.concatenate(
@@ -147,7 +148,7 @@ class Scene:
             view["target"] = tuple(np.asarray(view["target"], float) * factor)
             if view.get("ortho_height") is not None:
                 view["ortho_height"] = view["ortho_height"] * factor
-        return Scene(meshes, name=self.name, view=view)
+        return Scene(meshes, name=self.name, view=view, smooth_angle=self.smooth_angle)
 
     @property
     def mesh(self) -> trimesh.Trimesh:

@@ -76,9 +76,10 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
     --------
     >>> import tempfile, pathlib, trimesh
     >>> from vobscure.scenes import load
-    >>> folder = pathlib.Path(tempfile.mkdtemp())
-    >>> _ = trimesh.creation.box().export(folder / "cube.stl")
-    >>> vo_scene = load(folder / "cube.stl")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "cube.stl"
+    ...     _ = trimesh.creation.box().export(path)
+    ...     vo_scene = load(path)
     >>> list(vo_scene.meshes), len(vo_scene.triangles), vo_scene.is_watertight
     (['cube'], 12, True)
     """

@@ -137,13 +137,24 @@ def _extrude(polygon_xy, z0: float, z1: float) -> trimesh.Trimesh:
 
 
 def _box(lo, hi, *, angle_y: float = 0.0) -> trimesh.Trimesh:
-    """The box [lo, hi], optionally rotated by ``angle_y`` degrees about its own vertical axis."""
+    """The box [lo, hi], optionally rotated by ``angle_y`` degrees about its vertical axis.
+
+    The corners are taken from ``lo`` and ``hi`` exactly (not rebuilt from a centre and
+    extents), so boxes that should touch share their face planes bit for bit; a rotation
+    about y keeps the y coordinates exact.
+    """
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-    transform = trimesh.transformations.translation_matrix(0.5 * (lo + hi))
+    unit = trimesh.creation.box()  # the cube [-0.5, 0.5]^3, outward normals
+    corner = np.asarray(unit.vertices) > 0
+    vertices = np.where(corner, hi, lo)
     if angle_y:
-        transform = transform @ trimesh.transformations.rotation_matrix(
-            np.radians(angle_y), (0.0, 1.0, 0.0))
-    return trimesh.creation.box(extents=hi - lo, transform=transform)
+        a = np.radians(angle_y)
+        centre = 0.5 * (lo + hi)
+        dx, dz = vertices[:, 0] - centre[0], vertices[:, 2] - centre[2]
+        # rotation about +y by a (right-handed): x' = x cos a + z sin a, z' = -x sin a + z cos a
+        vertices[:, 0] = centre[0] + dx * np.cos(a) + dz * np.sin(a)
+        vertices[:, 2] = centre[2] - dx * np.sin(a) + dz * np.cos(a)
+    return trimesh.Trimesh(vertices, np.asarray(unit.faces), process=False)
 
 
 def _view(eye, target, *, fov_y: float = 45.0) -> dict:
@@ -183,7 +194,9 @@ def slab(*, size: float = 8.0, thickness: float = 1.0) -> Scene:
     -----
     A point on the top face, far enough from the rim, is unoccluded: AO and obscurance are
     1, the unclamped world-space VO of a ball centred on the surface is exactly 1/2 and the
-    normal-clamped VO is 1 (DESIGN.md, "Conventions").
+    normal-clamped VO is 1 (DESIGN.md, "Conventions"). The unclamped value needs the slab to
+    fill the lower half of the ball: radius <= thickness, and radius <= size/2 - max(|x|, |z|)
+    for a point (x, 0, z).
 
     Examples
     --------
@@ -203,7 +216,7 @@ def slab(*, size: float = 8.0, thickness: float = 1.0) -> Scene:
 
 
 def crease(*, length: float = 4.0, height: float = 4.0, depth: float = 8.0,
-           thickness: float = 1.0) -> Scene:
+           thickness: float = 2.0) -> Scene:
     """An L-shaped prism: a floor (top y = 0) meeting a wall (face x = 0) at a concave edge.
 
     The cross-section in the xy plane is the L-shaped polygon
@@ -230,11 +243,13 @@ def crease(*, length: float = 4.0, height: float = 4.0, depth: float = 8.0,
 
     Notes
     -----
-    For a point on the floor at (a, 0, 0) and a radius R <= min(L - a, H, depth/2), only the
-    wall cuts the hemisphere, and with c = a / R (DESIGN.md, "Testing"):
-    cosine-weighted AO = 1 - (acos c - c sqrt(1 - c^2)) / pi,
-    uniform AO = (1 + c) / 2 and world-space VO = 1/2 - (1 - c)^2 (2 + c) / 8.
-    The defaults allow R up to 2.5 for a <= 1.5.
+    For a point on the floor at (a, 0, 0), 0 <= a <= R, and a radius R <= min(L - a, H,
+    depth/2), only the wall cuts the hemisphere, and with c = a / R (DESIGN.md, "Testing"):
+    cosine-weighted AO = 1 - (acos c - c sqrt(1 - c^2)) / pi and
+    uniform AO = (1 + c) / 2. The world-space VO of the whole ball,
+    1/2 - (1 - c)^2 (2 + c) / 8, also needs the solid to fill the ball's lower half and the
+    part of it behind the wall: R <= t. The default thickness is 2 (not 1) so that the
+    defaults serve every formula for R up to 2 and a up to 2.
 
     Examples
     --------
@@ -242,8 +257,8 @@ def crease(*, length: float = 4.0, height: float = 4.0, depth: float = 8.0,
     >>> vo_scene = crease()
     >>> vo_scene.is_watertight
     True
-    >>> float(vo_scene.meshes["crease"].volume)  # t (L + t) + t H, times the depth
-    72.0
+    >>> float(vo_scene.meshes["crease"].volume)  # (t (L + t) + t H) depth
+    160.0
     """
     L = check_positive(length, "length")
     H = check_positive(height, "height")

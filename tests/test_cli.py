@@ -1,0 +1,63 @@
+"""The `vobscure` command: outputs, provenance, atomic writes, errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import vobscure as vo
+from vobscure import _io, cli
+
+
+def test_render_writes_images_and_npz(tmp_path, capsys):
+    status = cli.main(["render", "--scene", "crease", "--size", "24", "16", "--rays", "32",
+                       "--radius", "0.5", "--seed", "3", "--out", str(tmp_path), "--quiet"])
+    assert status == 0
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["crease_ao.npz", "crease_ao_depth.png", "crease_ao_normal.png", "crease_ao_visibility.png"]
+    with np.load(tmp_path / "crease_ao.npz") as data:
+        prov = json.loads(str(data["provenance"]))
+        vis, valid, depth = data["visibility"], data["valid"], data["depth"]
+    assert prov["scene"] == "crease" and prov["seed"] == 3 and prov["radius"] == 0.5
+    assert prov["camera"]["size"] == [24, 16] and prov["version"] == vo.__version__
+    assert prov["seconds"] > 0
+    assert vis.shape == (16, 24) and np.array_equal(np.isnan(vis), ~valid)
+    assert np.all(np.isposinf(depth[~valid]))
+    # the same job through the API gives the same numbers
+    scene = vo.scenes.crease()
+    gb = vo.render_gbuffer(scene, vo.Camera.from_dict(prov["camera"]))
+    ref = vo.ground_truth(scene, gb, radius=0.5, rays=32, seed=3, progress=False)
+    np.testing.assert_array_equal(ref.value, vis)
+
+
+def test_scenes_lists_registry(capsys):
+    assert cli.main(["scenes"]) == 0
+    out = capsys.readouterr().out
+    for name in vo.scenes.names():
+        assert name in out
+
+
+def test_bad_scene_is_a_clean_error(tmp_path, capsys):
+    assert cli.main(["render", "--scene", "nosuchscene", "--out", str(tmp_path), "--quiet"]) == 2
+    assert "nosuchscene" in capsys.readouterr().err
+    assert cli.main(["render", "--scene", str(tmp_path / "missing.obj"), "--quiet"]) == 2
+    assert cli.main(["render", "--scene", "slab", "--rays", "1", "--quiet", "--out", str(tmp_path)]) == 2
+    assert "rays" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_atomic_write_keeps_the_good_file(tmp_path):
+    target = tmp_path / "result.npz"
+    _io.save_npz(target, {"run": 1}, x=np.arange(3))
+    good = target.read_bytes()
+
+    def interrupted(fh):
+        fh.write(b"partial")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _io.atomic_write(target, interrupted)
+    assert target.read_bytes() == good
+    assert [p.name for p in tmp_path.iterdir()] == ["result.npz"]  # no temporary left behind
