@@ -1,0 +1,32 @@
+"""The README's example runs as written."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_readme_example_runs(capsys):
+    blocks = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
+    assert blocks, "README.md has no python example"
+    namespace: dict = {}
+    exec(compile(blocks[0], str(README), "exec"), namespace)
+    e = namespace["e"]
+    c = 0.5
+    import numpy as np
+
+    exact = 1 - (np.arccos(c) - c * np.sqrt(1 - c * c)) / np.pi
+    # the example's claim: the estimate sits on the closed form within its standard error
+    from conftest import t_threshold
+    from vobscure.groundtruth import DEFAULT_GROUPS
+
+    assert abs(e.value[0] - exact) < t_threshold(DEFAULT_GROUPS - 1) * e.stderr[0]
+    assert "(96, 128)" in capsys.readouterr().out
+
+
+def test_readme_commands():
+    text = README.read_text()
+    assert 'python -m pip install -e ".[test]" && vobscure render' in text
+    assert "python -m pytest" in text

@@ -1,0 +1,1 @@
+"""Experiments: parameter sweeps, reference caches and the figure modules (``figures/``)."""
