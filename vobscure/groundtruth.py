@@ -26,8 +26,8 @@ from tqdm.auto import tqdm
 from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
 from .estimate import Estimate
 from .raytrace import CHUNK_RAYS, parallel_map
-from .sampling import (cube_to_uniform_ball, sobol_base, square_to_cosine_hemisphere,
-                       square_to_uniform_hemisphere, to_world)
+from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base,
+                       square_to_cosine_hemisphere, square_to_uniform_hemisphere)
 from .scenes import Scene
 
 __all__ = ["ambient_occlusion", "obscurance", "volumetric_obscurance", "ground_truth",
@@ -79,13 +79,14 @@ def _groups(count: int, groups: int, name: str) -> tuple[int, int]:
     return g, -(-count // g)
 
 
-def _run_groups(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress, desc,
-                extra_dim: int = 0):
-    """Evaluate ``kernel(index_slice, u, child_rng)`` over chunks of points.
+def _chunked(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress, desc,
+             extra_dim: int = 0):
+    """Evaluate ``kernel(index_slice, base, shifts, child_rng)`` over chunks of points.
 
-    ``u`` is (P, g, m, dim) RQMC points for the chunk's P points. The kernel returns
-    (P, g) group means, or a tuple whose first entry is that and whose second is a
-    (P, extra_dim) per-point extra (summed bent-normal directions).
+    ``base`` is the (m, dim) scrambled Sobol' set shared by all points and ``shifts`` the
+    (P, g, dim) Cranley-Patterson shifts of the chunk's P points. The kernel returns (P, g)
+    group means, or a tuple of that and a (P, extra_dim) per-point extra (the summed
+    unoccluded directions for bent normals).
     """
     base = sobol_base(dim, m, rng)
     shifts = rng.random((n, g, dim))
@@ -94,10 +95,7 @@ def _run_groups(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progr
     child = rng.spawn(len(chunks))
 
     def work(k):
-        s = chunks[k]
-        u = base[None, None, :, :] + shifts[s][:, :, None, :]
-        u -= np.floor(u)
-        return kernel(s, u, child[k])
+        return kernel(chunks[k], base, shifts[chunks[k]], child[k])
 
     bar = tqdm(total=len(chunks), desc=desc, unit="chunk", disable=not progress, leave=False)
     try:
@@ -113,10 +111,11 @@ def _run_groups(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progr
     return value, stderr, extra
 
 
-def _hemisphere_rays(tracer, points, normals, offset_normals, u, weighting):
-    local = _WARPS[weighting](u.reshape(len(points), -1, 2))          # (P, R, 3)
-    dirs = to_world(local, normals)                                  # (P, R, 3)
-    origins = tracer.offset_origins(points, offset_normals)          # (P, 3)
+def _hemisphere_rays(tracer, points, normals, offset_normals, base, shifts, weighting):
+    """float32 origins (P*R, 3), directions (P*R, 3) and directions (P, R, 3), rays of a point contiguous."""
+    dirs = shifted_hemisphere_directions(normals, base, shifts, weighting)     # (P, g, m, 3)
+    dirs = dirs.reshape(len(points), -1, 3)
+    origins = tracer.offset_origins(points, offset_normals).astype(np.float32)
     origins = np.broadcast_to(origins[:, None, :], dirs.shape)
     return origins.reshape(-1, 3), dirs.reshape(-1, 3), dirs
 
@@ -127,18 +126,18 @@ def _ao(scene, points, normals, offset_normals, *, rays, weighting, max_distance
     g, m = _groups(rays, groups, "rays")
     rng = as_rng(seed)
 
-    def kernel(s, u, _rng):
-        o, d, dirs = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], u, weighting)
+    def kernel(s, base, shifts, _rng):
+        o, d, dirs = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], base, shifts, weighting)
         free = ~tracer.occluded(o, d, max_distance, threads=1)
-        free = free.reshape(u.shape[0], g, m)
-        means = free.mean(axis=2)
+        P = len(shifts)
+        means = free.reshape(P, g, m).mean(axis=2)
         if not bent_normals:
             return means
         # RTR 3rd ed. Sec. 9.2.1: the bent normal is the mean unoccluded direction.
-        summed = np.einsum("pr,prk->pk", free.reshape(u.shape[0], -1).astype(float), dirs)
+        summed = np.einsum("pr,prk->pk", free.reshape(P, -1).astype(float), dirs.astype(float))
         return means, summed
 
-    value, stderr, summed = _run_groups(kernel, len(points), g, m, 2, rng, threads=threads,
+    value, stderr, summed = _chunked(kernel, len(points), g, m, 2, rng, threads=threads,
                                         progress=progress, desc=desc, extra_dim=3 if bent_normals else 0)
     bent = None
     if bent_normals:
@@ -224,8 +223,8 @@ def _obscurance(scene, points, normals, offset_normals, *, radius, falloff, rays
     g, m = _groups(rays, groups, "rays")
     rng = as_rng(seed)
 
-    def kernel(s, u, _rng):
-        o, d, _ = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], u, weighting)
+    def kernel(s, base, shifts, _rng):
+        o, d, _ = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], base, shifts, weighting)
         hits = tracer.intersect(o, d, radius, threads=1)
         t = hits.distance / radius
         value = np.ones_like(t)
@@ -236,9 +235,9 @@ def _obscurance(scene, points, normals, offset_normals, *, radius, falloff, rays
             raise ValueError("falloff must map distances d / radius in [0, 1) to finite values in [0, 1], "
                              "elementwise on an array")
         value[hit] = rho_t
-        return value.reshape(u.shape[0], g, m).mean(axis=2)
+        return value.reshape(len(shifts), g, m).mean(axis=2)
 
-    value, stderr, _ = _run_groups(kernel, len(points), g, m, 2, rng, threads=threads,
+    value, stderr, _ = _chunked(kernel, len(points), g, m, 2, rng, threads=threads,
                                    progress=progress, desc=desc)
     return Estimate(value=value, stderr=stderr, samples=g * m)
 
@@ -314,8 +313,10 @@ def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes
     rng = as_rng(seed)
     face_normals = tracer.face_normals
 
-    def kernel(s, u, child):
-        P = u.shape[0]
+    def kernel(s, base, shifts, child):
+        P = len(shifts)
+        u = base[None, None, :, :] + shifts[:, :, None, :]
+        u -= np.floor(u)
         x = cube_to_uniform_ball(u)                                    # (P, g, m, 3), unit ball
         x = np.concatenate([x, -x], axis=2)                            # (P, g, 2m, 3)
         if normals is not None:
@@ -344,7 +345,7 @@ def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes
         w = rho(r2) / rho_mean
         return np.mean(w * ~occupied, axis=2)
 
-    value, stderr, _ = _run_groups(kernel, len(points), g, m, 3, rng, threads=threads,
+    value, stderr, _ = _chunked(kernel, len(points), g, m, 3, rng, threads=threads,
                                    progress=progress, desc=desc)
     return Estimate(value=value, stderr=stderr, samples=g * 2 * m)
 

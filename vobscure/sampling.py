@@ -19,6 +19,7 @@ __all__ = [
     "tangent_frame",
     "to_world",
     "sobol_base",
+    "shifted_hemisphere_directions",
 ]
 
 
@@ -76,3 +77,48 @@ def sobol_base(dim: int, n: int, rng: np.random.Generator) -> np.ndarray:
     m = max(1, int(np.ceil(np.log2(max(n, 1)))))
     engine = qmc.Sobol(d=dim, scramble=True, seed=rng)
     return engine.random_base2(m)[:n]
+
+
+def shifted_hemisphere_directions(normals: np.ndarray, base: np.ndarray, shifts: np.ndarray,
+                                  weighting: str = "cosine") -> np.ndarray:
+    """World directions of a Cranley-Patterson-shifted 2-D point set, in float32.
+
+    Equal (to float32 rounding) to ``to_world(warp((base + shift) mod 1), normals)`` with
+    ``warp`` :func:`square_to_cosine_hemisphere` or :func:`square_to_uniform_hemisphere`,
+    but about twice as fast: a shift of the azimuth coordinate u1 is a rotation of the
+    tangent frame about the normal, so cos/sin are taken once for the base set and once per
+    (point, group) rather than once per sample.
+
+    Parameters
+    ----------
+    normals : (P, 3) float
+        Unit normals.
+    base : (m, 2) float
+        Base points in [0, 1)^2.
+    shifts : (P, G, 2) float
+        One shift per point and group.
+    weighting : {"cosine", "uniform"}
+
+    Returns
+    -------
+    (P, G, m, 3) float32
+    """
+    f32 = np.float32
+    phi = 2.0 * np.pi * base[:, 1]
+    cos_phi, sin_phi = np.cos(phi).astype(f32), np.sin(phi).astype(f32)
+    alpha = 2.0 * np.pi * shifts[..., 1]
+    cos_a, sin_a = np.cos(alpha).astype(f32)[..., None], np.sin(alpha).astype(f32)[..., None]
+    t, b = tangent_frame(normals)
+    t, b = t.astype(f32)[:, None, :], b.astype(f32)[:, None, :]
+    t_rot = cos_a * t + sin_a * b                                   # (P, G, 3)
+    b_rot = cos_a * b - sin_a * t
+    u0 = base[:, 0].astype(f32)[None, None, :] + shifts[..., 0:1].astype(f32)   # (P, G, m)
+    u0 -= np.floor(u0)
+    if weighting == "cosine":
+        r, z = np.sqrt(u0), np.sqrt(np.maximum(f32(0), f32(1) - u0))
+    else:
+        z, r = u0, np.sqrt(np.maximum(f32(0), f32(1) - u0 * u0))
+    d = (r * cos_phi)[..., None] * t_rot[:, :, None, :]
+    d += (r * sin_phi)[..., None] * b_rot[:, :, None, :]
+    d += z[..., None] * normals.astype(f32)[:, None, None, :]
+    return d

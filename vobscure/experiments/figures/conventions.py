@@ -292,7 +292,7 @@ def _panel_pixels(ax):
     ax.set_ylim(H + 2.1, -1.05)  # row 0 at the top
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.set_title("(b) images: row 0 at the top, pixel (i, j) centred at (j + 0.5, i + 0.5)",
+    ax.set_title("(b) images: row 0 at the top,\npixel (i, j) centred at (x, y) = (j + 0.5, i + 0.5)",
                  fontsize=11)
 
 
