@@ -9,17 +9,20 @@ What is measured (DESIGN.md, "Performance")
 -------------------------------------------
 1. Occlusion throughput, in rays per second, on a real mesh (the Stanford bunny from
    ``/work/shared/data/meshes``, or a procedural blob when it is missing) and on the
-   Cornell box. The rays are built exactly as :func:`vobscure.ambient_occlusion` builds
-   them (same seed, same scrambled Sobol' base, same per-point shifts, cosine warp, same
-   origin offset), from the visible surface points of a G-buffer, with
-   ``max_distance = RADIUS_FRACTION * scene.extent``. The baseline is ONE call of
+   Cornell box, from the visible surface points of a G-buffer (256 x 256; 64 x 64 with
+   ``--quick``), 256 rays per point, ``max_distance = RADIUS_FRACTION * scene.extent``.
+   The rays are built exactly as :func:`vobscure.ambient_occlusion` builds them (same
+   seed, Sobol' base, per-point shifts, direction generator and origin offset; the run
+   checks that the per-point AO values agree). The baseline is ONE call of
    ``embree_scene.run(o32, d32, dists=..., query="OCCLUDED")`` over all of them
    (embreex traces them one by one on one thread).
 
    a. ``scene.tracer.occluded`` (chunked and threaded) on the same float32 arrays
-      against the baseline: pure tracing throughput. Goal >= 1.6x on 2 cores.
+      against the baseline: pure tracing throughput. Goal >= 1.6x on 2 cores. Also
+      with ``threads=1``, which isolates the chunking overhead.
    b. ``vo.ambient_occlusion(scene, points, normals, rays=256, max_distance=R)`` end to
       end (direction generation, tracing, reduction) against the baseline. Goal >= 1.6x.
+      Also with ``threads=1``.
    c. The baseline on the same rays in a random order, to document the claim that a
       point's rays being contiguous in memory makes tracing about 2x faster.
    d. The baseline cut into one contiguous part per thread and traced concurrently with
@@ -28,7 +31,8 @@ What is measured (DESIGN.md, "Performance")
 
 2. G-buffer: ``vo.render_gbuffer(scene, camera)`` against the bare Embree primary-ray
    query it contains (``camera.primary_rays()`` in float32, one ``run(o, d, output=1)``
-   call). Goal: ratio <= 2. A breakdown shows where the rest of the time goes.
+   call). Goal: ratio <= 2. A breakdown (primary rays, threaded intersect, hit points,
+   the rest) shows where the time goes.
 
 3. Ground truth per pixel: ``vo.ground_truth(scene, gb, quantity="ao", rays=256)`` at
    512 x 512 (128 x 128 with ``--quick``), seconds and rays per second, against the
@@ -40,6 +44,9 @@ Run from the repository root::
     python benchmarks/bench_groundtruth.py --quick    # small sizes, under 30 s (smoke test)
     python benchmarks/bench_groundtruth.py --repeats 5 --threads 2
 
+The "cores" column is process CPU time over wall time in the best round: how many cores
+the measurement actually got. On a shared machine a threaded ratio far below the thread
+count with cores near 1 means another process held the other core, not a slow library.
 The exit code is 0 unless something raises; no timing is asserted.
 """
 
@@ -60,7 +67,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a sourc
 
 import vobscure as vo  # noqa: E402
 from vobscure.raytrace import default_threads  # noqa: E402
-from vobscure.sampling import sobol_base, square_to_cosine_hemisphere, to_world  # noqa: E402
+from vobscure.sampling import shifted_hemisphere_directions, sobol_base  # noqa: E402
 
 BUNNY = Path("/work/shared/data/meshes/stanford-bunny.obj")
 #: AO ray length for the throughput benchmark, as a fraction of the scene's extent.
@@ -88,23 +95,30 @@ QUICK = Sizes(points=(64, 64), gbuffer=(128, 128), ground_truth=(128, 128))
 
 
 # --------------------------------------------------------------------------- timing
-def best_of(fns: dict, repeats: int) -> dict:
-    """Best wall time of each callable over ``repeats`` rounds, the callables interleaved.
+@dataclass(frozen=True)
+class Timing:
+    seconds: float   # best wall time (time.perf_counter)
+    cores: float     # process CPU time / wall time in that best round: cores actually used
+    result: object   # the callable's return value (last round)
 
-    Returns ``{name: (seconds, last result)}``.
-    """
-    best = {name: np.inf for name in fns}
+
+def best_of(fns: dict, repeats: int) -> dict:
+    """Best wall time of each callable over ``repeats`` rounds, the callables interleaved
+    round by round so that a change of machine load affects all of them alike."""
+    best = {name: (np.inf, 0.0) for name in fns}
     result = {}
     for _ in range(repeats):
         for name, fn in fns.items():
-            t0 = time.perf_counter()
+            c0, t0 = time.process_time(), time.perf_counter()
             result[name] = fn()
-            best[name] = min(best[name], time.perf_counter() - t0)
-    return {name: (best[name], result[name]) for name in fns}
+            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+            if wall < best[name][0]:
+                best[name] = (wall, cpu / wall)
+    return {name: Timing(*best[name], result[name]) for name in fns}
 
 
 class Report:
-    """Collects table rows and goal lines, and prints them."""
+    """Prints table rows as they come and collects the summary lines."""
 
     def __init__(self):
         self.summary = []
@@ -112,26 +126,29 @@ class Report:
     @staticmethod
     def header(title: str):
         print(f"\n== {title}")
-        print(f"  {'measurement':<50} {'best s':>9} {'Mrays/s':>9} {'ratio':>8}")
+        print(f"  {'measurement':<50} {'best s':>9} {'cores':>5} {'Mrays/s':>8} {'ratio':>8}")
 
     @staticmethod
-    def row(label: str, seconds: float, rays: int | None = None, ratio: float | None = None,
-            note: str = ""):
-        rate = f"{rays / seconds / 1e6:9.2f}" if rays else f"{'':9}"
+    def row(label: str, timing: Timing | float, rays: int | None = None,
+            ratio: float | None = None, note: str = ""):
+        seconds, cores = ((timing.seconds, f"{timing.cores:5.2f}") if isinstance(timing, Timing)
+                          else (timing, f"{'':5}"))
+        rate = f"{rays / seconds / 1e6:8.2f}" if rays else f"{'':8}"
         r = f"{ratio:7.2f}x" if ratio is not None else f"{'':8}"
-        print(f"  {label:<50} {seconds:9.4f} {rate} {r} {note}".rstrip())
+        print(f"  {label:<50} {seconds:9.4f} {cores} {rate} {r} {note}".rstrip())
 
     def goal(self, label: str, value: float, goal: float, *, at_least: bool, unit: str = "x"):
         ok = value >= goal if at_least else value <= goal
         sign = ">=" if at_least else "<="
-        self.summary.append(f"  {label:<62} {value:8.2f}{unit}  (goal {sign} {goal:g}{unit}: "
+        self.summary.append(f"  {label:<68} {value:8.2f}{unit}  (goal {sign} {goal:g}{unit}: "
                             f"{'met' if ok else 'MISSED'})")
 
     def note(self, label: str, value: float, unit: str = "x"):
-        self.summary.append(f"  {label:<62} {value:8.2f}{unit}")
+        self.summary.append(f"  {label:<68} {value:8.2f}{unit}")
 
     def print_summary(self):
-        print("\n== Summary (ratios from this one run)")
+        print("\n== Summary (ratios from this one run; 'cores' columns above show how many")
+        print("   cores each measurement actually got on this shared machine)")
         print("\n".join(self.summary))
 
 
@@ -164,28 +181,30 @@ def load_scenes() -> list:
 
 
 def surface_points(scene, size):
+    """Visible points and shading normals of a G-buffer render of the scene's own view."""
     gb = vo.render_gbuffer(scene, scene.camera(size))
     return gb.world_position[gb.valid], gb.world_normal[gb.valid]
 
 
 def ground_truth_rays(scene, points, normals, *, rays=RAYS, groups=GROUPS, seed=SEED):
-    """The (n * rays, 3) float64 origins and directions ambient_occlusion traces for ``seed``.
+    """The (n * rays, 3) float32 origins and directions ambient_occlusion traces for ``seed``.
 
-    Mirrors vobscure.groundtruth: a scrambled Sobol' base of m = rays / groups points,
-    ``groups`` uniform shifts per point (mod 1), cosine warp into each normal's frame,
-    origins offset along the normal; one point's rays contiguous.
+    Mirrors vobscure.groundtruth: normals renormalized (input validation), a scrambled
+    Sobol' base of m = rays / groups points and ``groups`` uniform shifts per point drawn
+    from ``default_rng(seed)`` in that order, cosine-weighted directions from
+    :func:`~vobscure.sampling.shifted_hemisphere_directions`, origins offset along the
+    normal; one point's rays contiguous. The benchmark checks that the AO values agree.
     """
+    normals = np.asarray(normals, np.float64)
+    normals = normals / np.linalg.norm(normals, axis=-1, keepdims=True)
     g = min(groups, rays)
     m = -(-rays // g)
     rng = np.random.default_rng(seed)
     base = sobol_base(2, m, rng)
     shifts = rng.random((len(points), g, 2))
-    u = base[None, None] + shifts[:, :, None]
-    u -= np.floor(u)
-    dirs = to_world(square_to_cosine_hemisphere(u.reshape(len(points), -1, 2)), normals)
-    origins = scene.tracer.offset_origins(points, normals)
-    origins = np.broadcast_to(origins[:, None, :], dirs.shape)
-    return origins.reshape(-1, 3), dirs.reshape(-1, 3)
+    dirs = shifted_hemisphere_directions(normals, base, shifts, "cosine").reshape(-1, 3)
+    origins = scene.tracer.offset_origins(points, normals).astype(np.float32)
+    return np.repeat(origins, g * m, axis=0), dirs
 
 
 def f32(a) -> np.ndarray:
@@ -205,6 +224,10 @@ def bench_throughput(scene, size, repeats, threads, report: Report):
     embree, tracer = scene.tracer.embree_scene, scene.tracer
     k = threads or default_threads()
 
+    def ao(threads):
+        return vo.ambient_occlusion(scene, points, normals, rays=RAYS, max_distance=radius, seed=SEED,
+                                    threads=threads)
+
     report.header(f"1. Occlusion throughput: {scene.name}, {len(points)} points x {RAYS} rays "
                   f"= {n} rays, max_distance {radius:.4g} ({RADIUS_FRACTION:g} x extent)")
     t = best_of({
@@ -212,30 +235,34 @@ def bench_throughput(scene, size, repeats, threads, report: Report):
         "shuffled": lambda: embree.run(o32s, d32s, dists=tfar, query="OCCLUDED"),
         "split": lambda: split_run(embree, o32, d32, tfar, k),
         "occluded_1": lambda: tracer.occluded(o32, d32, radius, threads=1),
-        "occluded": lambda: tracer.occluded(o32, d32, radius, threads=threads),
-        "ao_1": lambda: vo.ambient_occlusion(scene, points, normals, rays=RAYS, max_distance=radius,
-                                             seed=SEED, threads=1),
-        "ao": lambda: vo.ambient_occlusion(scene, points, normals, rays=RAYS, max_distance=radius,
-                                           seed=SEED, threads=threads),
+        "occluded": lambda: tracer.occluded(o32, d32, radius, threads=k),
+        "ao_1": lambda: ao(1),
+        "ao": lambda: ao(k),
     }, repeats)
-    bare = t["bare"][0]
-    report.row("bare run(OCCLUDED), 1 call, 1 thread", bare, n, 1.0, "(baseline)")
-    report.row("bare run(OCCLUDED), same rays shuffled", t["shuffled"][0], n, bare / t["shuffled"][0])
-    report.row(f"bare run(OCCLUDED), {k} equal parts on {k} threads", t["split"][0], n,
-               bare / t["split"][0], "(what the machine gives now)")
-    report.row("tracer.occluded(float32), threads=1", t["occluded_1"][0], n, bare / t["occluded_1"][0])
-    report.row(f"tracer.occluded(float32), threads={k}", t["occluded"][0], n, bare / t["occluded"][0])
-    report.row("ambient_occlusion end to end, threads=1", t["ao_1"][0], n, bare / t["ao_1"][0])
-    report.row(f"ambient_occlusion end to end, threads={k}", t["ao"][0], n, bare / t["ao"][0])
-    check_same_rays(t, report_label=scene.name)
+    bare = t["bare"].seconds
 
-    report.goal(f"[{scene.name}] tracer.occluded / bare (tracing)", bare / t["occluded"][0],
+    def speedup(name):
+        return bare / t[name].seconds
+
+    report.row("bare run(OCCLUDED), 1 call, 1 thread", t["bare"], n, 1.0, "(baseline)")
+    report.row("bare run(OCCLUDED), same rays shuffled", t["shuffled"], n, speedup("shuffled"))
+    report.row(f"bare run(OCCLUDED), {k} equal parts on {k} threads", t["split"], n, speedup("split"),
+               "(machine's ceiling now)")
+    report.row("tracer.occluded(float32), threads=1", t["occluded_1"], n, speedup("occluded_1"))
+    report.row(f"tracer.occluded(float32), threads={k}", t["occluded"], n, speedup("occluded"))
+    report.row("ambient_occlusion end to end, threads=1", t["ao_1"], n, speedup("ao_1"))
+    report.row(f"ambient_occlusion end to end, threads={k}", t["ao"], n, speedup("ao"))
+    check_same_rays(t["bare"].result, t["occluded"].result, t["ao"].result)
+
+    report.goal(f"[{scene.name}] tracer.occluded / bare (tracing)", speedup("occluded"),
                 GOAL_SPEEDUP, at_least=True)
-    report.goal(f"[{scene.name}] ambient_occlusion / bare (end to end)", bare / t["ao"][0],
+    report.goal(f"[{scene.name}] ambient_occlusion / bare (end to end)", speedup("ao"),
                 GOAL_SPEEDUP, at_least=True)
-    report.note(f"[{scene.name}] bare on {k} threads / bare (parallel ceiling now)", bare / t["split"][0])
+    report.note(f"[{scene.name}] bare on {k} threads / bare (machine's ceiling now)", speedup("split"))
+    report.note(f"[{scene.name}] ambient_occlusion / tracer.occluded, both threads={k}",
+                t["occluded"].seconds / t["ao"].seconds)
     report.note(f"[{scene.name}] bare contiguous / bare shuffled (claim ~2x)",
-                t["shuffled"][0] / bare)
+                t["shuffled"].seconds / bare)
 
 
 def split_run(embree, o32, d32, tfar, threads):
@@ -246,12 +273,11 @@ def split_run(embree, o32, d32, tfar, threads):
         return embree.run(o32, d32, dists=tfar, query="OCCLUDED")
     bounds = np.linspace(0, len(o32), threads + 1).astype(int)
     parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
-    pool = _split_pool(threads)
-    return np.concatenate(list(pool.map(
+    return np.concatenate(list(_split_pool(threads).map(
         lambda s: embree.run(o32[s], d32[s], dists=tfar[s], query="OCCLUDED"), parts)))
 
 
-_SPLIT_POOLS: dict = {}
+_SPLIT_POOLS: dict[int, ThreadPoolExecutor] = {}
 
 
 def _split_pool(threads: int) -> ThreadPoolExecutor:
@@ -260,22 +286,24 @@ def _split_pool(threads: int) -> ThreadPoolExecutor:
     return _SPLIT_POOLS[threads]
 
 
-def check_same_rays(t, report_label):
+def check_same_rays(bare_ids, occluded, estimate):
     """The benchmark's rays are the ones ambient_occlusion traces: the AO values must agree."""
-    free_bare = (t["bare"][1] == -1).reshape(-1, RAYS).mean(axis=1)
-    free_lib = ~t["occluded"][1]
-    ao = t["ao"][1].value
-    same = np.array_equal(free_bare, free_lib.reshape(-1, RAYS).mean(axis=1)) and np.allclose(free_bare, ao)
-    print(f"  same rays as ambient_occlusion: {'yes' if same else 'NO'} "
-          f"(mean AO {ao.mean():.4f}, bare {free_bare.mean():.4f})")
+    free_bare = (bare_ids == -1).reshape(-1, RAYS).mean(axis=1)
+    free_lib = (~occluded).reshape(-1, RAYS).mean(axis=1)
+    same_lib = int(np.count_nonzero(free_bare == free_lib))
+    same_ao = int(np.count_nonzero(np.isclose(free_bare, estimate.value, rtol=0, atol=1e-12)))
+    print(f"  check: per-point AO from the bare rays equals tracer.occluded's at {same_lib} and\n"
+          f"  ambient_occlusion's at {same_ao} of {len(free_bare)} points "
+          f"(mean AO {estimate.value.mean():.4f} vs bare {free_bare.mean():.4f})")
 
 
 def bench_gbuffer(scene, size, repeats, report: Report):
     """Benchmark 2: render_gbuffer against the bare primary-ray query it contains."""
     camera = scene.camera(size)
     tracer, embree = scene.tracer, scene.tracer.embree_scene
-    origins, dirs = camera.primary_rays()
-    o32, d32 = f32(origins.reshape(-1, 3)), f32(dirs.reshape(-1, 3))
+    origins, dirs = (a.reshape(-1, 3) for a in camera.primary_rays())
+    o32, d32 = f32(origins), f32(dirs)
+    hits = tracer.intersect(origins, dirs)
     n = len(o32)
 
     report.header(f"2. G-buffer: {scene.name}, {size[0]}x{size[1]} = {n} primary rays")
@@ -283,18 +311,20 @@ def bench_gbuffer(scene, size, repeats, report: Report):
         "bare": lambda: embree.run(o32, d32, output=1),
         "render": lambda: vo.render_gbuffer(scene, camera),
         "primary": camera.primary_rays,
-        "convert": lambda: (f32(origins.reshape(-1, 3)), f32(dirs.reshape(-1, 3))),
-        "intersect": lambda: tracer.intersect(origins.reshape(-1, 3), dirs.reshape(-1, 3)),
+        "convert": lambda: (f32(origins), f32(dirs)),
+        "intersect": lambda: tracer.intersect(origins, dirs),
+        "hit_points": lambda: tracer.hit_points(hits),
     }, repeats)
-    bare, render = t["bare"][0], t["render"][0]
-    rest = render - t["primary"][0] - t["intersect"][0]
-    report.row("bare run(output=1), 1 call, 1 thread", bare, n, 1.0, "(baseline)")
-    report.row("render_gbuffer total", render, n, render / bare, "(time ratio)")
-    print("  breakdown:")
-    report.row("  camera.primary_rays()", t["primary"][0], None, t["primary"][0] / bare)
-    report.row("  float32 conversion (bare path only)", t["convert"][0], None, t["convert"][0] / bare)
-    report.row("  tracer.intersect (threaded, in render)", t["intersect"][0], n, t["intersect"][0] / bare)
-    report.row("  rest: hit points, normals, view space", max(rest, 0.0), None, max(rest, 0.0) / bare)
+    bare, render = t["bare"].seconds, t["render"].seconds
+    rest = max(0.0, render - sum(t[k].seconds for k in ("primary", "intersect", "hit_points")))
+    report.row("bare run(output=1), 1 call, 1 thread", t["bare"], n, 1.0, "(baseline)")
+    report.row("render_gbuffer total", t["render"], n, render / bare, "(time ratio)")
+    print("  breakdown (time / bare):")
+    report.row("  camera.primary_rays()", t["primary"], None, t["primary"].seconds / bare)
+    report.row("  float32 conversion (bare path only)", t["convert"], None, t["convert"].seconds / bare)
+    report.row("  tracer.intersect (threaded)", t["intersect"], n, t["intersect"].seconds / bare)
+    report.row("  tracer.hit_points", t["hit_points"], None, t["hit_points"].seconds / bare)
+    report.row("  rest: normals, view space, scatter to image", rest, None, rest / bare)
     report.goal(f"[{scene.name}] render_gbuffer / bare primary query (time)", render / bare,
                 GOAL_GBUFFER, at_least=False)
 
@@ -308,10 +338,10 @@ def bench_ground_truth(scene, size, repeats, threads, report: Report):
                   f"x {RAYS} rays = {n} rays, max_distance inf")
     t = best_of({"gt": lambda: vo.ground_truth(scene, gb, quantity="ao", rays=RAYS, progress=False,
                                                threads=threads)}, repeats)
-    seconds = t["gt"][0]
-    report.row("ground_truth(quantity='ao')", seconds, n)
-    full = size[0] * size[1] * RAYS
-    print(f"  all {size[0] * size[1]} pixels covered at this rate: {full / (n / seconds):.2f} s")
+    seconds = t["gt"].seconds
+    report.row("ground_truth(quantity='ao')", t["gt"], n)
+    every = size[0] * size[1]
+    print(f"  all {every} pixels covered, at this rate: {every * RAYS / (n / seconds):.2f} s")
     report.goal(f"[{scene.name}] ground truth {size[0]}x{size[1]} x {RAYS} rays (s)", seconds,
                 GOAL_GROUND_TRUTH_SECONDS, at_least=False, unit=" s")
 

@@ -48,6 +48,20 @@ def test_crease_cosine_ao(crease):
     assert_unbiased(e, cosine_ao_exact(C_VALUES), df=DF)
 
 
+def test_point_on_the_crease_edge(crease):
+    """c = 0: the point lies on the floor and in the wall's plane at once.
+
+    Rays start off the floor along the normal *and* along their own direction, so rays
+    that leave the wall are not stopped by it at t = 0 and rays into the wall start inside
+    it and meet its far side (docs/groundtruth.md, "Rays leaving surfaces").
+    """
+    p, n = crease_points([0.0])
+    e = vo.ambient_occlusion(crease, p, n, rays=2048, seed=12, groups=GROUPS)
+    assert_unbiased(e, cosine_ao_exact(np.array([0.0])), df=DF)
+    e = vo.ambient_occlusion(crease, p, n, rays=2048, weighting="uniform", seed=12, groups=GROUPS)
+    assert_unbiased(e, uniform_ao_exact(np.array([0.0])), df=DF)
+
+
 def test_crease_uniform_ao(crease):
     p, n = crease_points(C_VALUES)
     e = vo.ambient_occlusion(crease, p, n, rays=2048, max_distance=R, weighting="uniform", seed=2,

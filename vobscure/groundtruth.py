@@ -115,8 +115,7 @@ def _hemisphere_rays(tracer, points, normals, offset_normals, base, shifts, weig
     """float32 origins (P*R, 3), directions (P*R, 3) and directions (P, R, 3), rays of a point contiguous."""
     dirs = shifted_hemisphere_directions(normals, base, shifts, weighting)     # (P, g, m, 3)
     dirs = dirs.reshape(len(points), -1, 3)
-    origins = tracer.offset_origins(points, offset_normals).astype(np.float32)
-    origins = np.broadcast_to(origins[:, None, :], dirs.shape)
+    origins = tracer.offset_origins(points, offset_normals, dirs)
     return origins.reshape(-1, 3), dirs.reshape(-1, 3), dirs
 
 

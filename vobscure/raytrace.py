@@ -166,12 +166,30 @@ class Tracer:
         return self._scene
 
     # -- ray-origin policy -------------------------------------------------------------
-    def offset_origins(self, points, normals) -> np.ndarray:
-        """Move surface points off their surface along (unit) ``normals`` by :attr:`offset`.
+    def offset_origins(self, points, normals, directions=None) -> np.ndarray:
+        """Ray origins for rays that leave surface points: moved off by :attr:`offset`.
 
-        ``normals`` must point to the side the rays leave towards (the open side).
+        Parameters
+        ----------
+        points : (n, 3) float
+        normals : (n, 3) float
+            Unit normals pointing to the side the rays leave towards (the open side).
+        directions : (n, k, 3) float, optional
+            The unit directions of k rays per point. Each origin then also moves
+            :attr:`offset` along its own ray, which matters where a point lies on two
+            surfaces at once (the edge of a crease): the normal offset alone leaves the
+            origin in the other surface's plane, where Embree reports a hit at t = 0.
+
+        Returns
+        -------
+        (n, 3) float64, or (n, k, 3) float32 when ``directions`` are given.
         """
-        return np.asarray(points, np.float64) + self.offset * np.asarray(normals, np.float64)
+        base = np.asarray(points, np.float64) + self.offset * np.asarray(normals, np.float64)
+        if directions is None:
+            return base
+        out = np.asarray(directions, np.float32) * np.float32(self.offset)
+        out += base.astype(np.float32)[:, None, :]
+        return out
 
     # -- queries -----------------------------------------------------------------------
     def _prepare(self, origins, directions, max_distance):

@@ -39,7 +39,9 @@ _SIZE = {False: (120, 80), True: (60, 40)}
 _AO_RAYS = {False: 64, True: 16}
 _CHECK_RAYS = {False: 1024, True: 64}        # rays per point of the (d) check, cosine AO
 _CHECK_SAMPLES = {False: 4096, True: 256}    # points per ball of the (d) check, VO
-_CHECK_C = {False: np.linspace(0.0, 1.0, 6), True: np.array([0.0, 0.5, 1.0])}
+# c > 0: a point exactly on the edge (c = 0) lies on the wall too, where a ray origin offset
+# along the floor normal stays in the wall's plane and every ray is reported blocked.
+_CHECK_C = {False: np.linspace(0.1, 1.0, 7), True: np.array([0.25, 0.6, 1.0])}
 _DPI = 110
 _SEED = 0
 
@@ -103,19 +105,19 @@ def make(out_dir, quick: bool = False) -> list[Path]:
                          seed=_SEED, progress=False)
     check = _crease_check(vo, scene, quick)
 
-    fig = Figure(figsize=(13.0, 13.6), layout="constrained")
+    fig = Figure(figsize=(13.0, 13.6), dpi=_DPI, layout="constrained")
     FigureCanvasAgg(fig)
     rows = fig.subfigures(3, 1, height_ratios=[1.15, 0.8, 1.0], hspace=0.02)
     top = rows[0].subplots(1, 2, width_ratios=[1.55, 1.0])
     _panel_spaces(top[0], cam, scene)
     _panel_pixels(top[1])
-    _panel_gbuffer(rows[1], gb, ao, quick)
+    _panel_gbuffer(rows[1], gb, ao)
     bottom = rows[2].subplots(1, 2, width_ratios=[1.0, 1.25])
-    _panel_ball(bottom[0])
+    _panel_ball(bottom[0], scene)
     _panel_closed_forms(bottom[1], check, quick)
 
     path = out_dir / FILENAME
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=_DPI))
+    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi="figure"))
     return [path]
 
 
@@ -173,8 +175,22 @@ def _out_of_page(ax, xy, color, label, into=False, offset=(0.0, -0.42), radius=0
     ax.text(x + offset[0], y + offset[1], label, color=color, fontsize=10, ha="center", va="center")
 
 
-def _crease_profile(t=2.0, L=4.0, H=4.0):
+def _crease_profile(t, L, H):
+    """The L-shaped cross-section of :func:`vobscure.scenes.crease` in the xy plane."""
     return np.array([(-t, -t), (L, -t), (L, 0.0), (0.0, 0.0), (0.0, H), (-t, H)])
+
+
+def _equal_aspect(ax, xlim, ylim):
+    """Show at least ``xlim`` x ``ylim`` at equal aspect, widening the limits to fit the axes.
+
+    Widening the data limits (``adjustable="datalim"``) instead of shrinking the axes box keeps
+    the constrained layout stable: a shrunk box moves its title after the layout has placed it.
+    ``auto=None`` keeps autoscaling on, so matplotlib widens the limits without logging that
+    it ignores fixed limits.
+    """
+    ax.set_xlim(*xlim, auto=None)
+    ax.set_ylim(*ylim, auto=None)
+    ax.set_aspect("equal", adjustable="datalim")
 
 
 # ----------------------------------------------------------------------------- panels
@@ -182,15 +198,18 @@ def _panel_spaces(ax, cam, scene):
     """(a) Side view (the plane z = 0) of the crease, the camera and both frames."""
     from matplotlib.patches import Polygon
 
-    ax.add_patch(Polygon(_crease_profile(), closed=True, fc=_SOLID, ec="k", lw=1.0, zorder=1))
+    (lo, hi) = scene.bounds  # the crease's profile: x in [-t, L], y in [-t, H]
+    profile = _crease_profile(t=-lo[0], L=hi[0], H=hi[1])
+    ax.add_patch(Polygon(profile, closed=True, fc=_SOLID, ec="k", lw=1.0, zorder=1))
     ax.text(-1.0, 2.2, "wall\n(face x = 0)", ha="center", va="center", fontsize=9)
     ax.text(2.6, -1.0, "floor (top y = 0)", ha="center", va="center", fontsize=9)
 
     # world frame at the origin: x right, y up, z toward the reader
-    _arrow(ax, (0, 0), (1.3, 0), _WORLD, "$x_w$", label_at=1.22)
+    _arrow(ax, (0, 0), (1.3, 0), _WORLD)
+    ax.text(1.3, 0.22, "$x_w$", color=_WORLD, fontsize=10, ha="center", va="center")
     _arrow(ax, (0, 0), (0, 1.3), _WORLD, "$y_w$", label_at=1.18)
     _out_of_page(ax, (0.0, 0.0), _WORLD, "", radius=0.11)
-    ax.text(-0.45, 0.25, "$z_w$", color=_WORLD, fontsize=10, ha="center", va="center")
+    ax.text(-0.2, 0.3, "$z_w$ (out of\nthe page)", color=_WORLD, fontsize=9, ha="right", va="center")
 
     # the camera: frustum in the drawing plane, view axes at the eye
     eye = cam.eye[:2]
@@ -202,16 +221,20 @@ def _panel_spaces(ax, cam, scene):
         d = np.cos(half) * fwd + s * np.sin(half) * up
         ax.plot([eye[0], eye[0] + far * d[0]], [eye[1], eye[1] + far * d[1]], color="0.55", lw=0.9,
                 ls="--", zorder=2)
-    body = np.array([eye - 0.25 * fwd + 0.22 * up, eye - 0.25 * fwd - 0.22 * up,
-                     eye + 0.18 * fwd - 0.12 * up, eye + 0.18 * fwd + 0.12 * up])
-    ax.add_patch(Polygon(body + 0.0 * fwd, closed=True, fc="0.25", ec="k", zorder=4))
-    ax.add_patch(Polygon(body - 0.45 * fwd, closed=True, fc="0.45", ec="k", zorder=3))
-    _arrow(ax, eye, 1.5 * fwd, _VIEW, "$z_v$ (forward)", label_at=1.0, fontsize=10,
-           bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
-    _arrow(ax, eye, 1.3 * up, _VIEW, "$y_v$ (up)", label_at=1.25)
-    _out_of_page(ax, eye + np.array([0.55, -0.45]), _VIEW, "$x_v$ (right) = $-z_w$,\ninto the page",
+    body = np.array([eye - 0.2 * fwd + 0.22 * up, eye - 0.2 * fwd - 0.22 * up,
+                     eye - 0.8 * fwd - 0.22 * up, eye - 0.8 * fwd + 0.22 * up])
+    lens = np.array([eye - 0.2 * fwd + 0.12 * up, eye - 0.2 * fwd - 0.12 * up, eye - 0.16 * up,
+                     eye + 0.16 * up])
+    ax.add_patch(Polygon(body, closed=True, fc="0.35", ec="k", zorder=4))
+    ax.add_patch(Polygon(lens, closed=True, fc="0.6", ec="k", zorder=4))
+    ax.plot(*eye, "o", color=_VIEW, ms=4, zorder=6)
+    _arrow(ax, eye, 1.5 * fwd, _VIEW)
+    ax.text(*(eye + 1.2 * fwd + np.array([0.0, 0.3])), "$z_v$", color=_VIEW, fontsize=11, ha="center",
+            va="center")
+    _arrow(ax, eye, 1.3 * up, _VIEW, "$y_v$", label_at=1.2, fontsize=11)
+    _out_of_page(ax, eye + np.array([0.55, -0.45]), _VIEW, "$x_v = -z_w$,\ninto the page",
                  into=True, offset=(0.15, -0.62))
-    ax.text(eye[0] - 0.1, eye[1] + 1.95, "eye", fontsize=9, ha="center")
+    ax.text(eye[0] + 0.75, eye[1] + 0.55, "eye\n(view origin)", fontsize=9, ha="center", va="bottom")
 
     # a floor point P: depth z (along forward) versus the ray distance |P - eye|
     P = np.array([2.2, 0.0])
@@ -223,9 +246,10 @@ def _panel_spaces(ax, cam, scene):
     dist = float(np.linalg.norm(P - eye))
     ax.plot(*P, "ko", ms=4, zorder=6)
     ax.text(P[0] - 0.05, P[1] - 0.35, "P", fontsize=10, ha="center", va="center", zorder=6)
-    mid = 0.5 * (eye + foot)
-    ax.text(mid[0] + 0.35, mid[1] + 0.55, f"depth z = {z:.2f}\n(gb.depth)", color=_VIEW, fontsize=9,
-            ha="center", va="bottom")
+    mid = 0.55 * eye + 0.45 * foot
+    ax.text(mid[0] - 0.7, mid[1] + 0.2, f"depth z = {z:.2f} (gb.depth)", color=_VIEW, fontsize=9,
+            ha="center", va="bottom", rotation=np.degrees(np.arctan2(fwd[1], fwd[0])) + 180.0,
+            rotation_mode="anchor")
     midr = 0.55 * eye + 0.45 * P
     ax.text(midr[0] + 0.1, midr[1] - 0.45, f"ray distance {dist:.2f}", fontsize=9, ha="center",
             va="top")
@@ -234,22 +258,24 @@ def _panel_spaces(ax, cam, scene):
     n_world = np.array([0.0, 1.0, 0.0])
     n_view = cam.world_to_view_dir(n_world)
     _arrow(ax, P, (0.0, 1.1), "k", lw=1.6)
-    ax.text(P[0] - 0.12, P[1] + 1.35,
-            f"n = (0, 1, 0) world\n= ({n_view[0]:+.2f}, {n_view[1]:+.2f}, {n_view[2]:+.2f}) view:\n"
-            "$n_z < 0$, facing the camera",
-            fontsize=9, ha="center", va="bottom")
+    ax.text(P[0] + 0.1, P[1] + 0.75, "n", fontsize=10, ha="left", va="center")
+    ax.annotate(f"floor normal n = (0, 1, 0) in world space,\n"
+                f"({n_view[0]:+.2f}, {n_view[1]:+.2f}, {n_view[2]:+.2f}) in view space:\n"
+                "$n_z < 0$ since it faces the camera",
+                xy=P + np.array([0.0, 1.05]), xytext=(1.9, 3.05), fontsize=9, ha="center", va="bottom",
+                arrowprops={"arrowstyle": "-", "color": "0.4", "lw": 0.8, "shrinkB": 3},
+                bbox={"fc": "white", "ec": "0.8", "alpha": 0.9, "pad": 2})
 
-    ax.set_xlim(-2.6, 8.6)
-    ax.set_ylim(-2.4, 4.9)
-    ax.set_aspect("equal")
+    _equal_aspect(ax, (-2.6, 9.2), (-2.4, 4.9))
     ax.set_xlabel("world x")
     ax.set_ylabel("world y")
     ax.set_title("(a) world space (right-handed, y up) and view space\n"
                  "(camera at origin, x right, y up, z = depth > 0 in front)", fontsize=11)
-    rows = ["world -> view:  p_v = R (p_w - eye),",
+    rows = ["view axes: x_v = right, y_v = up, z_v = forward",
+            "world -> view:  p_v = R (p_w - eye),",
             "R rows = (right, up, forward),  det R = -1"]
-    ax.text(0.985, 0.975, "\n".join(rows), transform=ax.transAxes, ha="right", va="top", fontsize=9,
-            family="monospace", bbox={"fc": "white", "ec": "0.7", "pad": 3})
+    ax.text(0.985, 0.025, "\n".join(rows), transform=ax.transAxes, ha="right", va="bottom", fontsize=9,
+            multialignment="left", family="monospace", bbox={"fc": "white", "ec": "0.7", "pad": 3})
 
 
 def _panel_pixels(ax):
@@ -257,7 +283,7 @@ def _panel_pixels(ax):
     from matplotlib.patches import Rectangle
 
     W, H = 6, 4
-    i, j = 1, 3
+    i, j = 3, 4
     for r in range(H):
         for col in range(W):
             fc = "#fde9a9" if (r, col) == (i, j) else "white"
@@ -270,8 +296,10 @@ def _panel_pixels(ax):
     ax.text(W / 2, -0.75, "column j", ha="center", va="center", fontsize=10)
 
     ax.plot([j + 0.5], [i + 0.5], "o", color=_VIEW, ms=6)
-    ax.text(j + 0.5, i + 0.78, f"pixel (i, j) = ({i}, {j})\ncentre (x, y) = ({j + 0.5}, {i + 0.5})",
-            ha="center", va="top", fontsize=8.5, color=_VIEW)
+    ax.annotate(f"pixel (i, j) = ({i}, {j}): centre (x, y) = ({j + 0.5}, {i + 0.5})",
+                xy=(j + 0.5, i + 0.5), xytext=(W / 2 + 0.4, H + 0.45), ha="center", va="top",
+                fontsize=9, color=_VIEW,
+                arrowprops={"arrowstyle": "-", "color": _VIEW, "lw": 0.8, "shrinkB": 4})
     # continuous axes from the top-left corner of pixel (0, 0)
     ax.plot([0], [0], "ks", ms=5)
     ax.annotate("", xy=(W + 0.7, 0), xytext=(0, 0),
@@ -284,19 +312,17 @@ def _panel_pixels(ax):
     ax.plot([W / 2], [H / 2], "+", color="k", ms=12, mew=1.6)
     ax.text(W / 2 + 0.12, H / 2 + 0.12, "(W/2, H/2)", fontsize=8.5, ha="left", va="top")
 
-    ax.text(W / 2, H + 1.35,
+    ax.text(W / 2, H + 1.2,
             "image array shape (H, W) = (4, 6); camera size = (width, height) = (6, 4)\n"
             "row 0 is the top; y grows down; image up = view +y",
             ha="center", va="top", fontsize=9)
-    ax.set_xlim(-1.1, W + 1.3)
-    ax.set_ylim(H + 2.1, -1.05)  # row 0 at the top
-    ax.set_aspect("equal")
+    _equal_aspect(ax, (-1.1, W + 1.3), (H + 2.05, -1.05))  # y inverted: row 0 at the top
     ax.axis("off")
     ax.set_title("(b) images: row 0 at the top,\npixel (i, j) centred at (x, y) = (j + 0.5, i + 0.5)",
                  fontsize=11)
 
 
-def _panel_gbuffer(subfig, gb, ao, quick):
+def _panel_gbuffer(subfig, gb, ao):
     """(c) depth, view-space normals and ray-cast AO of the crease."""
     import matplotlib as mpl
     from matplotlib.patches import Patch
@@ -341,22 +367,21 @@ def _panel_gbuffer(subfig, gb, ao, quick):
                     fontsize=11)
 
 
-def _panel_ball(ax):
+def _panel_ball(ax, scene):
     """(d, left) Cross-section z = 0 of the ball around a floor point at distance a from the wall."""
-    from matplotlib.patches import Circle, Polygon, Rectangle
+    from matplotlib.patches import Circle, Polygon
 
-    R = 1.0
-    a = 0.4
+    R = RADIUS
+    a = 0.4 * R
     P = np.array([a, 0.0])
-    ax.add_patch(Polygon(_crease_profile(t=1.5, L=2.2, H=1.7), closed=True, fc=_SOLID, ec="k",
-                         lw=1.0, zorder=1))
-    # the ball: open part, then the occupied part clipped to the solid
+    (lo, hi) = scene.bounds
+    profile = _crease_profile(t=-lo[0], L=hi[0], H=hi[1])
+    ax.add_patch(Polygon(profile, closed=True, fc=_SOLID, ec="k", lw=1.0, zorder=1))
+    # the ball: its open part, then the solid again, clipped to the ball: the occupied part
     ax.add_patch(Circle(P, R, fc=_OPEN, ec="none", zorder=2))
-    clip = Circle(P, R, transform=ax.transData)
-    for lo, size in (((-1.5, -1.5), (3.7, 1.5)), ((-1.5, 0.0), (1.5, 1.7))):
-        patch = Rectangle(lo, *size, fc=_OCCUPIED, ec="none", zorder=3)
-        ax.add_patch(patch)
-        patch.set_clip_path(clip)
+    occupied = Polygon(profile, closed=True, fc=_OCCUPIED, ec="none", zorder=3)
+    ax.add_patch(occupied)
+    occupied.set_clip_path(Circle(P, R, transform=ax.transData))
     ax.add_patch(Circle(P, R, fill=False, ec="k", lw=1.4, zorder=4))
     ax.plot([P[0] - R, P[0] + R], [0, 0], color="k", lw=1.0, ls="--", zorder=4)
 
@@ -379,9 +404,7 @@ def _panel_ball(ax):
     ax.text(-0.75, 1.45, "wall", fontsize=9, ha="center")
     ax.text(1.85, -1.3, "floor", fontsize=9, ha="center")
     ax.text(P[0] + 1.08, 0.05, "half-ball\nboundary", fontsize=8, ha="left", va="bottom")
-    ax.set_xlim(-1.5, 2.4)
-    ax.set_ylim(-1.5, 1.7)
-    ax.set_aspect("equal")
+    _equal_aspect(ax, (-1.5, 2.4), (-1.5, 1.7))
     ax.set_xlabel("world x")
     ax.set_ylabel("world y")
     ax.set_title("(d) visibility, not occlusion: VO = the open fraction\n"
@@ -406,11 +429,12 @@ def _panel_closed_forms(ax, check, quick):
             label=f"ray-cast ground truth ({'quick' if quick else 'full'}), $\\pm$2 stderr")
     ax.axhline(0.5, color="0.6", lw=0.8, ls=":")
     ax.axhline(1.0, color="0.6", lw=0.8, ls=":")
-    ax.text(0.99, 0.515, "flat open surface: ball VO = 0.5", ha="right", va="bottom", fontsize=8.5,
+    ax.text(0.5, 0.515, "flat open surface: ball VO = 0.5", ha="center", va="bottom", fontsize=8.5,
             color="0.35")
-    ax.text(0.99, 0.985, "clamped VO = AO = 1", ha="right", va="top", fontsize=8.5, color="0.35")
+    ax.text(0.01, 0.985, "flat open surface: half-ball VO = AO = 1", ha="left", va="top", fontsize=8.5,
+            color="0.35")
     ax.set_xlim(0.0, 1.0)
-    ax.set_ylim(0.2, 1.05)
+    ax.set_ylim(0.0, 1.05)
     ax.set_xlabel("c = a / R  (distance from the wall over the radius)")
     ax.set_ylabel("visibility (1 = open)")
     ax.legend(loc="lower right", fontsize=8.5, framealpha=0.95)
