@@ -25,9 +25,9 @@ What is measured (DESIGN.md, "Performance")
       Also with ``threads=1``.
    c. The baseline on the same rays in a random order, to document the claim that a
       point's rays being contiguous in memory makes tracing about 2x faster.
-   d. The baseline cut into one contiguous part per thread and traced concurrently with
-      no vobscure code involved: the parallel speed-up the (shared) machine offers at
-      that moment, against which a missed goal can be read.
+   d. The baseline cut into contiguous parts (8 per thread) traced concurrently on the
+      worker threads with no vobscure code involved: the parallel speed-up the (shared)
+      machine offers at that moment, against which a missed goal can be read.
 
 2. G-buffer: ``vo.render_gbuffer(scene, camera)`` against the bare Embree primary-ray
    query it contains (``camera.primary_rays()`` in float32, one ``run(o, d, output=1)``
@@ -66,6 +66,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source tree
 
 import vobscure as vo  # noqa: E402
+from vobscure.groundtruth import DEFAULT_GROUPS  # noqa: E402
 from vobscure.raytrace import default_threads  # noqa: E402
 from vobscure.sampling import shifted_hemisphere_directions, sobol_base  # noqa: E402
 
@@ -74,10 +75,10 @@ BUNNY = Path("/work/shared/data/meshes/stanford-bunny.obj")
 RADIUS_FRACTION = 0.1
 #: Rays per point, as in the ground truth's default.
 RAYS = 256
-#: Independent randomizations per point (vobscure.groundtruth.DEFAULT_GROUPS).
-GROUPS = 8
+#: Independent randomizations per point, as in the ground truth's default.
+GROUPS = DEFAULT_GROUPS
 SEED = 0
-#: Goals from the brief: threaded / bare-single-thread throughput, and G-buffer overhead.
+#: Goals: threaded / bare single-thread throughput, G-buffer time ratio, ground-truth seconds.
 GOAL_SPEEDUP = 1.6
 GOAL_GBUFFER = 2.0
 GOAL_GROUND_TRUTH_SECONDS = 60.0
@@ -153,6 +154,10 @@ class Report:
 
 
 # --------------------------------------------------------------------------- setup
+def load_average() -> str:
+    return ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+
+
 def machine_facts(threads: int | None):
     import embreex
     import scipy
@@ -161,10 +166,9 @@ def machine_facts(threads: int | None):
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - non-Linux
         cores = os.cpu_count()
-    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
     print("== Machine")
     print(f"  cores usable (sched_getaffinity): {cores}   os.cpu_count: {os.cpu_count()}   "
-          f"load average: {load}")
+          f"load average: {load_average()}")
     print(f"  python {platform.python_version()}   numpy {np.__version__}   scipy {scipy.__version__}   "
           f"embreex {getattr(embreex, '__version__', '?')}   vobscure {vo.__version__}")
     print(f"  vobscure threads: {threads if threads is not None else default_threads()}"
@@ -192,8 +196,9 @@ def ground_truth_rays(scene, points, normals, *, rays=RAYS, groups=GROUPS, seed=
     Mirrors vobscure.groundtruth: normals renormalized (input validation), a scrambled
     Sobol' base of m = rays / groups points and ``groups`` uniform shifts per point drawn
     from ``default_rng(seed)`` in that order, cosine-weighted directions from
-    :func:`~vobscure.sampling.shifted_hemisphere_directions`, origins offset along the
-    normal; one point's rays contiguous. The benchmark checks that the AO values agree.
+    :func:`~vobscure.sampling.shifted_hemisphere_directions`, origins from
+    ``tracer.offset_origins`` (off the surface along the normal and along each ray); one
+    point's rays contiguous. The benchmark checks that the AO values agree.
     """
     normals = np.asarray(normals, np.float64)
     normals = normals / np.linalg.norm(normals, axis=-1, keepdims=True)
@@ -202,9 +207,9 @@ def ground_truth_rays(scene, points, normals, *, rays=RAYS, groups=GROUPS, seed=
     rng = np.random.default_rng(seed)
     base = sobol_base(2, m, rng)
     shifts = rng.random((len(points), g, 2))
-    dirs = shifted_hemisphere_directions(normals, base, shifts, "cosine").reshape(-1, 3)
-    origins = scene.tracer.offset_origins(points, normals).astype(np.float32)
-    return np.repeat(origins, g * m, axis=0), dirs
+    dirs = shifted_hemisphere_directions(normals, base, shifts, "cosine").reshape(len(points), -1, 3)
+    origins = scene.tracer.offset_origins(points, normals, dirs)
+    return origins.reshape(-1, 3), dirs.reshape(-1, 3)
 
 
 def f32(a) -> np.ndarray:
@@ -246,32 +251,35 @@ def bench_throughput(scene, size, repeats, threads, report: Report):
 
     report.row("bare run(OCCLUDED), 1 call, 1 thread", t["bare"], n, 1.0, "(baseline)")
     report.row("bare run(OCCLUDED), same rays shuffled", t["shuffled"], n, speedup("shuffled"))
-    report.row(f"bare run(OCCLUDED), {k} equal parts on {k} threads", t["split"], n, speedup("split"),
-               "(machine's ceiling now)")
+    report.row(f"bare run(OCCLUDED), in parts on {k} thread(s)", t["split"], n,
+               speedup("split"), "(machine's ceiling now)")
     report.row("tracer.occluded(float32), threads=1", t["occluded_1"], n, speedup("occluded_1"))
     report.row(f"tracer.occluded(float32), threads={k}", t["occluded"], n, speedup("occluded"))
     report.row("ambient_occlusion end to end, threads=1", t["ao_1"], n, speedup("ao_1"))
     report.row(f"ambient_occlusion end to end, threads={k}", t["ao"], n, speedup("ao"))
     check_same_rays(t["bare"].result, t["occluded"].result, t["ao"].result)
 
-    report.goal(f"[{scene.name}] tracer.occluded / bare (tracing)", speedup("occluded"),
-                GOAL_SPEEDUP, at_least=True)
-    report.goal(f"[{scene.name}] ambient_occlusion / bare (end to end)", speedup("ao"),
-                GOAL_SPEEDUP, at_least=True)
-    report.note(f"[{scene.name}] bare on {k} threads / bare (machine's ceiling now)", speedup("split"))
+    for label, name in (("tracer.occluded / bare (tracing)", "occluded"),
+                        ("ambient_occlusion / bare (end to end)", "ao")):
+        if k >= 2:  # the 1.6x goal is for two or more cores
+            report.goal(f"[{scene.name}] {label}", speedup(name), GOAL_SPEEDUP, at_least=True)
+        else:
+            report.note(f"[{scene.name}] {label}, 1 thread (no goal)", speedup(name))
+    report.note(f"[{scene.name}] bare on {k} thread(s) / bare (machine's ceiling now)",
+                speedup("split"))
     report.note(f"[{scene.name}] ambient_occlusion / tracer.occluded, both threads={k}",
                 t["occluded"].seconds / t["ao"].seconds)
     report.note(f"[{scene.name}] bare contiguous / bare shuffled (claim ~2x)",
                 t["shuffled"].seconds / bare)
 
 
-def split_run(embree, o32, d32, tfar, threads):
-    """The bare query cut into ``threads`` contiguous parts traced concurrently (embreex
-    releases the GIL): the parallel speed-up the machine offers at this moment, with no
-    vobscure code involved."""
+def split_run(embree, o32, d32, tfar, threads, parts_per_thread=8):
+    """The bare query cut into contiguous parts traced concurrently on ``threads`` threads
+    (embreex releases the GIL; several parts per thread balance uneven work): the parallel
+    speed-up the machine offers at this moment, with no vobscure code involved."""
     if threads == 1:
         return embree.run(o32, d32, dists=tfar, query="OCCLUDED")
-    bounds = np.linspace(0, len(o32), threads + 1).astype(int)
+    bounds = np.linspace(0, len(o32), threads * parts_per_thread + 1).astype(int)
     parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
     return np.concatenate(list(_split_pool(threads).map(
         lambda s: embree.run(o32[s], d32[s], dists=tfar[s], query="OCCLUDED"), parts)))
@@ -321,7 +329,8 @@ def bench_gbuffer(scene, size, repeats, report: Report):
     report.row("render_gbuffer total", t["render"], n, render / bare, "(time ratio)")
     print("  breakdown (time / bare):")
     report.row("  camera.primary_rays()", t["primary"], None, t["primary"].seconds / bare)
-    report.row("  float32 conversion (bare path only)", t["convert"], None, t["convert"].seconds / bare)
+    report.row("  float32 conversion (bare path only)", t["convert"], None,
+               t["convert"].seconds / bare)
     report.row("  tracer.intersect (threaded)", t["intersect"], n, t["intersect"].seconds / bare)
     report.row("  tracer.hit_points", t["hit_points"], None, t["hit_points"].seconds / bare)
     report.row("  rest: normals, view space, scatter to image", rest, None, rest / bare)
@@ -378,8 +387,8 @@ def main(argv=None) -> int:
     for scene in scenes:
         bench_ground_truth(scene, sizes.ground_truth, args.repeats, args.threads, report)
     report.print_summary()
-    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-    print(f"\n  total benchmark time {time.perf_counter() - start:.1f} s   load average now: {load}")
+    print(f"\n  total benchmark time {time.perf_counter() - start:.1f} s   "
+          f"load average now: {load_average()}")
     return 0
 
 
