@@ -62,6 +62,18 @@ def test_point_on_the_crease_edge(crease):
     assert_unbiased(e, uniform_ao_exact(np.array([0.0])), df=DF)
 
 
+def test_stderr_never_zero_inside_the_range(crease):
+    """Next to the edge every group of stratified directions sees exactly half the wall,
+    the group means agree and their spread is 0; the reported stderr must not be 0 there."""
+    p, n = crease_points([0.003, 0.01])
+    e = vo.ambient_occlusion(crease, p, n, rays=256, max_distance=R, seed=0)
+    assert np.all(e.stderr > 0)
+    assert_unbiased(e, cosine_ao_exact(np.array([0.003, 0.01])), df=DEFAULT_GROUPS - 1)
+    v = vo.volumetric_obscurance(crease, p, radius=R, samples=512, seed=0)
+    assert np.all(v.stderr > 0)
+    assert_unbiased(v, ball_vo_exact(np.array([0.003, 0.01])), df=DEFAULT_GROUPS - 1)
+
+
 def test_crease_uniform_ao(crease):
     p, n = crease_points(C_VALUES)
     e = vo.ambient_occlusion(crease, p, n, rays=2048, max_distance=R, weighting="uniform", seed=2,

@@ -80,13 +80,14 @@ def _groups(count: int, groups: int, name: str) -> tuple[int, int]:
 
 
 def _chunked(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress, desc,
-             extra_dim: int = 0):
+             extra_dim: int = 0, per_group: int | None = None):
     """Evaluate ``kernel(index_slice, base, shifts, child_rng)`` over chunks of points.
 
     ``base`` is the (m, dim) scrambled Sobol' set shared by all points and ``shifts`` the
     (P, g, dim) Cranley-Patterson shifts of the chunk's P points. The kernel returns (P, g)
     group means, or a tuple of that and a (P, extra_dim) per-point extra (the summed
-    unoccluded directions for bent normals).
+    unoccluded directions for bent normals). ``per_group`` is the number of samples behind
+    one group mean (default m; 2 m for the antithetic ball samples).
     """
     base = sobol_base(dim, m, rng)
     shifts = rng.random((n, g, dim))
@@ -108,6 +109,13 @@ def _chunked(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress
         extra = np.concatenate([r[1] for r in results]) if n else np.zeros((0, extra_dim))
     value = means.mean(axis=1)
     stderr = means.std(axis=1, ddof=1) / np.sqrt(g)
+    # Stratification can make every group count the same number of occluded samples, so the
+    # spread of the group means is 0 although the value is not exact (a point next to an
+    # edge, where any shift of the base set puts exactly half the directions behind the
+    # wall). A group mean of binary samples moves in steps of 1 / m: report one such step
+    # per group instead of 0 there (docs/groundtruth.md, "When the standard error degenerates").
+    degenerate = (stderr == 0) & (value > 0) & (value < 1)
+    stderr[degenerate] = 1.0 / ((per_group or m) * np.sqrt(g))
     return value, stderr, extra
 
 
@@ -345,7 +353,7 @@ def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes
         return np.mean(w * ~occupied, axis=2)
 
     value, stderr, _ = _chunked(kernel, len(points), g, m, 3, rng, threads=threads,
-                                   progress=progress, desc=desc)
+                                progress=progress, desc=desc, per_group=2 * m)
     return Estimate(value=value, stderr=stderr, samples=g * 2 * m)
 
 
