@@ -569,16 +569,27 @@ class Camera:
             directions = np.broadcast_to(self._forward, origins.shape).copy()
         return origins, directions
 
-    def primary_rays(self) -> tuple[np.ndarray, np.ndarray]:
+    def primary_rays(self, *, dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
         """World-space rays through every pixel centre.
+
+        Parameters
+        ----------
+        dtype : numpy float dtype
+            float64 (default) or float32 (what Embree consumes; the G-buffer asks for it).
 
         Returns
         -------
-        origins : (H, W, 3) float64
-            ``eye`` for a perspective camera; points on the plane through ``eye``
-            perpendicular to ``forward`` for an orthographic one.
-        directions : (H, W, 3) float64
+        origins : (H, W, 3)
+            ``eye`` for a perspective camera (a read-only broadcast view); points on the
+            plane through ``eye`` perpendicular to ``forward`` for an orthographic one.
+        directions : (H, W, 3)
             Unit directions; all ``forward`` for an orthographic camera.
+
+        Notes
+        -----
+        The same rays as ``pixel_rays(pixel_centers())``, computed separably: a pixel's
+        direction is ``a_j right + b_i up + forward`` with ``a_j`` depending on the column
+        only and ``b_i`` on the row only, which is several times faster at image sizes.
 
         Examples
         --------
@@ -587,7 +598,23 @@ class Camera:
         >>> directions.shape, directions[1, 1].round(6).tolist()
         ((3, 3, 3), [0.0, 0.0, -1.0])
         """
-        return self.pixel_rays(self.pixel_centers())
+        W, H = self._size
+        x = np.arange(W, dtype=np.float64) + 0.5 - W / 2.0
+        y = H / 2.0 - (np.arange(H, dtype=np.float64) + 0.5)
+        right, up, forward = (v.astype(dtype) for v in (self._right, self._up, self._forward))
+        if self._focal is not None:
+            a = (x / self._focal).astype(dtype)[None, :, None]
+            b = (y / self._focal).astype(dtype)[:, None, None]
+            directions = a * right + (b * up + forward)
+            directions *= (1.0 / np.sqrt(a * a + b * b + 1.0)).astype(dtype)
+            origins = np.broadcast_to(self._eye.astype(dtype), directions.shape)
+        else:
+            s = self._ortho_height / H
+            a = (x * s).astype(dtype)[None, :, None]
+            b = (y * s).astype(dtype)[:, None, None]
+            origins = a * right + (b * up + self._eye.astype(dtype))
+            directions = np.broadcast_to(forward, origins.shape)
+        return origins, directions
 
     # ------------------------------------------------------------------ derived cameras
     def scaled(self, factor) -> Camera:

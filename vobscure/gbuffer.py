@@ -94,47 +94,55 @@ def render_gbuffer(scene, camera) -> GBuffer:
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a vobscure Camera, got {type(camera).__name__}")
     tracer = scene.tracer
-    origins, dirs = camera.primary_rays()
     H, W = camera.height, camera.width
-    hits = tracer.intersect(origins.reshape(-1, 3), dirs.reshape(-1, 3))
-    valid = hits.hit
-    prim = hits.primitive[valid]
-    dirs_v = dirs.reshape(-1, 3)[valid]
-
-    world_pos = np.full((H * W, 3), np.nan)
-    world_pos[valid] = tracer.hit_points(hits)[valid]
+    origins, dirs = camera.primary_rays(dtype=np.float32)
+    dirs = dirs.reshape(-1, 3)
+    hits = tracer.intersect(origins.reshape(-1, 3), dirs)
+    idx = np.flatnonzero(hits.primitive >= 0)          # covered pixels, row-major
+    prim = hits.primitive[idx]
+    d = dirs[idx].astype(np.float64)
 
     # geometric normal, flipped to face the camera (against the ray direction)
     n_geo = scene.face_normals[prim]
-    flip = np.einsum("ij,ij->i", n_geo, dirs_v) > 0
-    sign = np.where(flip, -1.0, 1.0)[:, None]
-    n_geo = n_geo * sign
-    # shading normal: corner normals interpolated with Embree's barycentrics
-    u, v = hits.barycentric[valid, 0:1], hits.barycentric[valid, 1:2]
-    corners = scene.corner_normals[prim]
-    n_sh = (1.0 - u - v) * corners[:, 0] + u * corners[:, 1] + v * corners[:, 2]
-    n_sh *= sign
-    length = np.linalg.norm(n_sh, axis=1, keepdims=True)
-    n_sh = n_sh / np.where(length > 0, length, 1.0)
-    away = (length[:, 0] == 0) | (np.einsum("ij,ij->i", n_sh, dirs_v) >= 0)
-    n_sh[away] = n_geo[away]
+    sign = np.where(np.einsum("ij,ij->i", n_geo, d) > 0, -1.0, 1.0)[:, None]
+    n_geo *= sign
+    n_geo += 0.0  # no negative zeros in the output
+    # Hit point: origin + t * direction in float64, then projected onto the triangle's plane,
+    # which removes Embree's float32 error across the plane (the error that matters for
+    # self-intersection) at the cost of two (k, 3) gathers instead of a (k, 3, 3) one.
+    o = origins.reshape(-1, 3)[idx].astype(np.float64) if origins.strides[0] else camera.eye
+    p = o + hits.distance[idx, None] * d
+    p -= np.einsum("ij,ij->i", p - scene.triangles[prim, 0], n_geo)[:, None] * n_geo
+    # shading normal: corner normals interpolated with Embree's barycentrics, only on
+    # triangles whose corners are not all the face normal (flat meshes skip the gather)
+    n_sh = n_geo.copy()
+    smooth = scene.smooth_faces[prim]
+    if smooth.any():
+        js = np.flatnonzero(smooth)
+        u, v = hits.barycentric[idx[js], 0:1], hits.barycentric[idx[js], 1:2]
+        corners = scene.corner_normals[prim[js]]
+        ns = ((1.0 - u - v) * corners[:, 0] + u * corners[:, 1] + v * corners[:, 2]) * sign[js]
+        length = np.sqrt(np.einsum("ij,ij->i", ns, ns))[:, None]
+        ok = (length[:, 0] > 0) & (np.einsum("ij,ij->i", ns, d[js]) < 0)
+        # where the interpolated normal would face away from the camera, keep the geometric one
+        n_sh[js[ok]] = ns[ok] / length[ok]
 
-    def full(values, fill):
-        out = np.full((H * W, 3), fill, dtype=np.float64)
-        out[valid] = values
+    view_p = camera.world_to_view(p)
+    rot_t = camera.rotation.T
+
+    def image(values, fill):
+        out = np.full((H * W, 3), fill)
+        out[idx] = values
         return out.reshape(H, W, 3)
 
-    world_normal = full(n_sh, 0.0)
-    world_geo = full(n_geo, 0.0)
-    position = np.full((H * W, 3), np.nan)
-    position[valid] = camera.world_to_view(world_pos[valid])
-    view_n = full(camera.world_to_view_dir(n_sh), 0.0)
-    view_g = full(camera.world_to_view_dir(n_geo), 0.0)
     depth = np.full(H * W, np.inf)
-    depth[valid] = position[valid, 2]
+    depth[idx] = view_p[:, 2]
     primitive = np.full(H * W, -1, dtype=np.int64)
-    primitive[valid] = prim
-    return GBuffer(depth=depth.reshape(H, W), normal=view_n, geometric_normal=view_g,
-                   position=position.reshape(H, W, 3), world_position=world_pos.reshape(H, W, 3),
-                   world_normal=world_normal, world_geometric_normal=world_geo,
-                   valid=valid.reshape(H, W), primitive=primitive.reshape(H, W), camera=camera)
+    primitive[idx] = prim
+    valid = np.zeros(H * W, dtype=bool)
+    valid[idx] = True
+    return GBuffer(depth=depth.reshape(H, W), normal=image(n_sh @ rot_t, 0.0),
+                   geometric_normal=image(n_geo @ rot_t, 0.0), position=image(view_p, np.nan),
+                   world_position=image(p, np.nan), world_normal=image(n_sh, 0.0),
+                   world_geometric_normal=image(n_geo, 0.0), valid=valid.reshape(H, W),
+                   primitive=primitive.reshape(H, W), camera=camera)

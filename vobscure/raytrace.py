@@ -187,25 +187,32 @@ class Tracer:
         base = np.asarray(points, np.float64) + self.offset * np.asarray(normals, np.float64)
         if directions is None:
             return base
-        out = np.asarray(directions, np.float32) * np.float32(self.offset)
-        out += base.astype(np.float32)[:, None, :]
+        d = np.asarray(directions, np.float32)
+        out = np.empty(d.shape, dtype=np.float32)
+        step = np.float32(self.offset)
+        base32 = base.astype(np.float32)
+        for k in range(3):  # contiguous per-component passes (see sampling.shifted_hemisphere_directions)
+            comp = d[..., k] * step
+            comp += base32[:, None, k]
+            out[..., k] = comp
         return out
 
     # -- queries -----------------------------------------------------------------------
     def _prepare(self, origins, directions, max_distance):
+        """float32 C-contiguous (n, 3) rays and tfar: a float, or an (n,) float32 array."""
         o = np.ascontiguousarray(np.asarray(origins, dtype=np.float32).reshape(-1, 3))
         d = np.ascontiguousarray(np.asarray(directions, dtype=np.float32).reshape(-1, 3))
         if o.shape != d.shape:
             raise ValueError(f"origins and directions must have the same shape, got {o.shape} and {d.shape}")
         n = len(o)
         tfar = np.asarray(max_distance, dtype=np.float64)
+        if np.any(np.isnan(tfar)) or np.any(tfar < 0):
+            raise ValueError("max_distance must be >= 0 (inf allowed), got a negative or NaN value")
         if tfar.ndim == 0:
-            tfar = np.full(n, tfar)
+            return o, d, float(tfar)  # embreex fills a scalar itself: no per-ray array
         tfar = tfar.reshape(-1)
         if tfar.shape != (n,):
             raise ValueError(f"max_distance must be a scalar or one value per ray ({n}), got shape {tfar.shape}")
-        if np.any(np.isnan(tfar)) or np.any(tfar < 0):
-            raise ValueError("max_distance must be >= 0 (inf allowed), got a negative or NaN value")
         return o, d, np.ascontiguousarray(tfar.astype(np.float32))
 
     def _chunks(self, n: int, threads: int | None):
@@ -213,13 +220,19 @@ class Tracer:
         size = max(1024, min(CHUNK_RAYS, -(-n // threads)))
         return threads, [slice(i, min(i + size, n)) for i in range(0, n, size)]
 
+    @staticmethod
+    def _tfar(tfar, s):
+        # embreex writes hit distances into an array tfar it was given: hand it a copy
+        return tfar if isinstance(tfar, float) else tfar[s].copy()
+
     def occluded(self, origins, directions, max_distance=np.inf, *, threads: int | None = None) -> np.ndarray:
         """Whether each ray hits any triangle within ``max_distance``.
 
         Parameters
         ----------
         origins, directions : (n, 3) float
-            Ray origins (already offset off any surface) and directions.
+            Ray origins (already offset off any surface) and directions. float32
+            C-contiguous input is used as is; anything else is converted once.
         max_distance : float or (n,) float
             Ray length limit (tfar); inf for unlimited.
         threads : int, optional
@@ -238,7 +251,7 @@ class Tracer:
         threads, chunks = self._chunks(len(o), threads)
 
         def work(s):
-            out[s] = self._scene.run(o[s], d[s], dists=tfar[s].copy(), query="OCCLUDED") != -1
+            out[s] = self._scene.run(o[s], d[s], dists=self._tfar(tfar, s), query="OCCLUDED") != -1
 
         self._run(work, chunks, threads)
         return out
@@ -247,21 +260,25 @@ class Tracer:
         """First hit of each ray within ``max_distance`` (see :class:`Hits`)."""
         o, d, tfar = self._prepare(origins, directions, max_distance)
         n = len(o)
-        dist = np.full(n, np.inf)
-        prim = np.full(n, -1, dtype=np.int64)
-        bary = np.zeros((n, 2))
+        dist = np.empty(n, dtype=np.float64)
+        prim = np.empty(n, dtype=np.int64)
+        bary = np.empty((n, 2), dtype=np.float64)
         if n:
             threads, chunks = self._chunks(n, threads)
 
             def work(s):
-                res = self._scene.run(o[s], d[s], dists=tfar[s].copy(), output=1)
-                p = res["primID"].astype(np.int64)
-                hit = (p >= 0) & (res["geomID"] >= 0)
-                prim[s] = np.where(hit, p, -1)
-                dist[s] = np.where(hit, res["tfar"], np.inf)
-                bary[s] = np.where(hit[:, None], np.stack([res["u"], res["v"]], axis=1), 0.0)
+                res = self._scene.run(o[s], d[s], dists=self._tfar(tfar, s), output=1)
+                prim[s] = res["primID"]
+                dist[s] = res["tfar"]
+                bary[s, 0] = res["u"]
+                bary[s, 1] = res["v"]
 
             self._run(work, chunks, threads)
+            miss = prim < 0  # embreex reports -1 (RTC_INVALID_GEOMETRY_ID) for a miss
+            if miss.any():
+                dist[miss] = np.inf
+                prim[miss] = -1
+                bary[miss] = 0.0
         return Hits(distance=dist, primitive=prim, barycentric=bary)
 
     def hit_points(self, hits: Hits) -> np.ndarray:

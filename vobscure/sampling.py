@@ -118,7 +118,14 @@ def shifted_hemisphere_directions(normals: np.ndarray, base: np.ndarray, shifts:
         r, z = np.sqrt(u0), np.sqrt(np.maximum(f32(0), f32(1) - u0))
     else:
         z, r = u0, np.sqrt(np.maximum(f32(0), f32(1) - u0 * u0))
-    d = (r * cos_phi)[..., None] * t_rot[:, :, None, :]
-    d += (r * sin_phi)[..., None] * b_rot[:, :, None, :]
-    d += z[..., None] * normals.astype(f32)[:, None, None, :]
-    return d
+    x, y = r * cos_phi, r * sin_phi                                 # (P, G, m) each
+    n32 = normals.astype(f32)
+    # one contiguous (P, G, m) pass per output component: broadcasting over a trailing
+    # axis of length 3 is several times slower
+    out = np.empty(u0.shape + (3,), dtype=f32)
+    for k in range(3):
+        comp = x * t_rot[:, :, None, k]
+        comp += y * b_rot[:, :, None, k]
+        comp += z * n32[:, None, None, k]
+        out[..., k] = comp
+    return out
