@@ -472,9 +472,8 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     elif quantity != "ao":
         raise ValueError(f"radius is required for quantity={quantity!r}")
     valid = gbuffer.valid
-    points = gbuffer.world_position[valid]
-    normals = gbuffer.world_normal[valid]
-    geo = gbuffer.world_geometric_normal[valid]
+    hits = gbuffer.hits  # per covered pixel, row-major: the order of a boolean mask
+    points, normals, geo = hits["world_position"], hits["world_normal"], hits["world_geometric_normal"]
     desc = f"ground truth ({quantity})"
     if quantity == "ao":
         check_choice(weighting, "weighting", _WARPS)

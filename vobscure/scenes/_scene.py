@@ -41,6 +41,8 @@ class Scene:
         Which entry of ``meshes`` each triangle came from.
     corner_normals : (m, 3, 3) float64
         Unit shading normal at each corner of each triangle (see ``smooth_angle``).
+    plane_offsets : (m,) float64
+        c in each triangle's plane equation ``face_normals . x = c``.
     smooth_faces : (m,) bool
         Triangles whose corner normals are not all their face normal (the others are flat
         shaded, and the G-buffer skips their interpolation).
@@ -87,6 +89,8 @@ class Scene:
         self.smooth_angle: dict[str, float] = angles
         self.corner_normals = np.concatenate(
             [_corner_normals(m, angles[k]) for k, m in clean.items()]).astype(np.float64)
+        #: c of each triangle's plane n . x = c (float64), for projecting points onto it
+        self.plane_offsets = np.einsum("ij,ij->i", normals, self.triangles[:, 0])
         self.smooth_faces = np.any(np.abs(self.corner_normals - normals[:, None, :]) > 1e-12, axis=(1, 2))
         self.mesh_index = np.concatenate(
             [np.full(len(m.faces), i, dtype=np.int32) for i, m in enumerate(clean.values())]
