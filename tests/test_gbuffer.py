@@ -102,3 +102,21 @@ def test_real_meshes_render(path):
     ref = vo.ground_truth(scene, gb, quantity="ao", radius=0.2 * scene.extent, rays=16, progress=False)
     assert np.all((ref.value[gb.valid] >= 0) & (ref.value[gb.valid] <= 1))
     assert np.array_equal(np.isnan(ref.value), ~gb.valid)
+
+
+def test_hits_match_images_and_lazy_fields_are_read_only():
+    scene = vo.scenes.sphere_on_plane(subdivisions=2)
+    gb = vo.render_gbuffer(scene, scene.camera((37, 23)))
+    hits = gb.hits
+    np.testing.assert_array_equal(hits["index"], np.flatnonzero(gb.valid))
+    for key in ("world_position", "world_normal", "world_geometric_normal"):
+        np.testing.assert_array_equal(getattr(gb, key).reshape(-1, 3)[hits["index"]], hits[key])
+    np.testing.assert_allclose(gb.camera.world_to_view(hits["world_position"]),
+                               gb.position.reshape(-1, 3)[hits["index"]], atol=1e-12)
+    for field in (gb.depth, gb.normal, gb.position, gb.world_position, gb.valid):
+        assert not field.flags.writeable
+    with pytest.raises(ValueError):
+        gb.depth[0, 0] = 1.0
+    g32 = gb.astype(np.float32)
+    assert g32.world_position.dtype == np.float32 and g32.normal.dtype == np.float32
+    np.testing.assert_allclose(g32.depth[gb.valid], gb.depth[gb.valid], rtol=1e-6)

@@ -58,3 +58,22 @@ def test_fast_directions_equal_reference_path(weighting, warp):
     slow = to_world(warp(u.reshape(P, -1, 2)), n).reshape(P, G, m, 3)
     assert fast.dtype == np.float32
     np.testing.assert_allclose(fast, slow, atol=1e-5)  # float32 rounding
+
+
+def test_fused_origins_equal_tracer_offsets():
+    import trimesh
+
+    import vobscure as vo
+
+    tracer = vo.Scene(trimesh.creation.box()).tracer
+    rng = np.random.default_rng(4)
+    P, G, m = 5, 2, 8
+    n = rng.normal(size=(P, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    pts = rng.random((P, 3))
+    base, shifts = rng.random((m, 2)), rng.random((P, G, 2))
+    o, d = shifted_hemisphere_directions(n, base, shifts, origins=tracer.offset_origins(pts, n),
+                                         step=tracer.offset)
+    np.testing.assert_array_equal(d, shifted_hemisphere_directions(n, base, shifts))
+    expect = tracer.offset_origins(pts, n, d.reshape(P, -1, 3)).reshape(o.shape)
+    np.testing.assert_allclose(o, expect, rtol=0, atol=1e-6)

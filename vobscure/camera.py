@@ -569,17 +569,19 @@ class Camera:
             directions = np.broadcast_to(self._forward, origins.shape).copy()
         return origins, directions
 
-    def primary_rays(self, *, dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
+    def primary_rays(self, *, dtype=np.float64, rows: slice | None = None) -> tuple[np.ndarray, np.ndarray]:
         """World-space rays through every pixel centre.
 
         Parameters
         ----------
         dtype : numpy float dtype
             float64 (default) or float32 (what Embree consumes; the G-buffer asks for it).
+        rows : slice, optional
+            Only these image rows (the G-buffer makes bands of rows in parallel).
 
         Returns
         -------
-        origins : (H, W, 3)
+        origins : (H, W, 3)  (or (rows, W, 3))
             ``eye`` for a perspective camera (a read-only broadcast view); points on the
             plane through ``eye`` perpendicular to ``forward`` for an orthographic one.
         directions : (H, W, 3)
@@ -600,7 +602,7 @@ class Camera:
         """
         W, H = self._size
         x = np.arange(W, dtype=np.float64) + 0.5 - W / 2.0
-        y = H / 2.0 - (np.arange(H, dtype=np.float64) + 0.5)
+        y = H / 2.0 - (np.arange(H, dtype=np.float64)[rows if rows is not None else slice(None)] + 0.5)
         right, up, forward = (v.astype(dtype) for v in (self._right, self._up, self._forward))
         if self._focal is not None:
             a = (x / self._focal).astype(dtype)[None, :, None]

@@ -48,74 +48,59 @@ class GBuffer:
         float64, or float32 after :meth:`astype`.
     """
 
-    def __init__(self, camera, index, world_position, world_normal, world_geometric_normal,
-                 primitive, *, dtype=np.float64, _depth=None, _normal=None):
+    def __init__(self, camera, *, depth, normal, valid, primitive, hits, dtype=np.float64):
         self.camera = camera
         self.dtype = np.dtype(dtype)
-        H, W = camera.height, camera.width
-        self._index = np.asarray(index, dtype=np.int64)
-        self._hits = {"world_position": np.asarray(world_position, np.float64),
-                      "world_normal": np.asarray(world_normal, np.float64),
-                      "world_geometric_normal": np.asarray(world_geometric_normal, np.float64)}
-        valid = np.zeros(H * W, dtype=bool)
-        valid[self._index] = True
-        prim = np.full(H * W, -1, dtype=np.int64)
-        prim[self._index] = primitive
-        depth = np.full(H * W, np.inf, dtype=self.dtype)
-        # linear depth: the view z of the hit, i.e. (p - eye) . forward
-        if _depth is None:
-            _depth = (self._hits["world_position"] - camera.eye) @ camera.forward
-        depth[self._index] = _depth
-        self.valid = _frozen(valid.reshape(H, W))
-        self.primitive = _frozen(prim.reshape(H, W))
-        self.depth = _frozen(depth.reshape(H, W))
-        if _normal is None:
-            _normal = self._hits["world_normal"] @ camera.rotation.T
-        self.normal = self._image(_normal, 0.0)
+        self.depth = _frozen(np.asarray(depth, dtype=self.dtype))
+        self.normal = _frozen(np.asarray(normal, dtype=self.dtype))
+        self.valid = _frozen(np.asarray(valid, dtype=bool))
+        self.primitive = _frozen(np.asarray(primitive, dtype=np.int64))
+        self._hit_source = hits
 
     @property
     def shape(self) -> tuple[int, int]:
         """(H, W)."""
         return self.depth.shape
 
-    @property
+    @cached_property
     def hits(self) -> dict:
-        """Per-hit world-space data, pixels in row-major order: ``index`` (k,) flat pixel
-        indices and (k, 3) float64 ``world_position``, ``world_normal``,
-        ``world_geometric_normal``. Equal to ``gb.world_position.reshape(-1, 3)[index]``
-        and so on, without building the images."""
-        return {"index": self._index, **self._hits}
+        """Per-hit world-space data, pixels in row-major order (the order of a boolean mask):
+        ``index`` (k,) flat pixel indices and (k, 3) float64 ``world_position``,
+        ``world_normal``, ``world_geometric_normal``. Equal to
+        ``gb.world_position.reshape(-1, 3)[index]`` and so on, without building the images."""
+        source = self._hit_source
+        return source() if callable(source) else source
 
     def _image(self, values, fill) -> np.ndarray:
-        H, W = self.camera.height, self.camera.width
+        H, W = self.shape
         out = np.full((H * W, 3), fill, dtype=self.dtype)
-        out[self._index] = values
+        out[self.hits["index"]] = values
         return _frozen(out.reshape(H, W, 3))
 
     @cached_property
     def world_position(self) -> np.ndarray:
-        return self._image(self._hits["world_position"], np.nan)
+        return self._image(self.hits["world_position"], np.nan)
 
     @cached_property
     def world_normal(self) -> np.ndarray:
-        return self._image(self._hits["world_normal"], 0.0)
+        return self._image(self.hits["world_normal"], 0.0)
 
     @cached_property
     def world_geometric_normal(self) -> np.ndarray:
-        return self._image(self._hits["world_geometric_normal"], 0.0)
+        return self._image(self.hits["world_geometric_normal"], 0.0)
 
     @cached_property
     def position(self) -> np.ndarray:
-        return self._image(self.camera.world_to_view(self._hits["world_position"]), np.nan)
+        return self._image(self.camera.world_to_view(self.hits["world_position"]), np.nan)
 
     @cached_property
     def geometric_normal(self) -> np.ndarray:
-        return self._image(self._hits["world_geometric_normal"] @ self.camera.rotation.T, 0.0)
+        return self._image(self.hits["world_geometric_normal"] @ self.camera.rotation.T, 0.0)
 
     def astype(self, dtype) -> "GBuffer":
         """The same G-buffer whose float images are of ``dtype`` (e.g. float32 for precision tests)."""
-        return GBuffer(self.camera, self._index, primitive=self.primitive.reshape(-1)[self._index],
-                       dtype=dtype, **self._hits)
+        return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
+                       primitive=self.primitive, hits=self.hits, dtype=dtype)
 
     def __repr__(self) -> str:
         H, W = self.shape
@@ -123,6 +108,7 @@ class GBuffer:
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
+    a = a.view()
     a.flags.writeable = False
     return a
 
@@ -156,30 +142,48 @@ def render_gbuffer(scene, camera) -> GBuffer:
     scene = _as_scene(scene)
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a vobscure Camera, got {type(camera).__name__}")
-    origins, dirs = camera.primary_rays(dtype=np.float32)
-    origins, dirs = origins.reshape(-1, 3), dirs.reshape(-1, 3)
-    n = len(dirs)
-    # Tracing and shading of blocks of pixels run in parallel, each block on one thread.
-    # Blocks of about CHUNK_RAYS pixels: with a few huge blocks the threads' temporaries are
-    # fresh multi-megabyte allocations whose page faults serialize them (measured: 2 blocks
-    # gave no speed-up on 2 cores, 8 blocks of 32k pixels gave 2x).
+    H, W = camera.height, camera.width
+    depth = np.full(H * W, np.inf)
+    normal = np.zeros((H * W, 3))
+    valid = np.zeros(H * W, dtype=bool)
+    primitive = np.full(H * W, -1, dtype=np.int64)
+    # Bands of rows are traced and shaded in parallel, each on one thread, and write their
+    # own slices of the images. Bands of about CHUNK_RAYS pixels: with a few huge bands the
+    # threads' temporaries are fresh multi-megabyte allocations whose page faults serialize
+    # them (measured: 2 bands gave no speed-up on 2 cores, 8 bands of 32k pixels gave 2x).
     threads = default_threads()
-    count = max(2 * threads, -(-n // CHUNK_RAYS))
-    bounds = np.linspace(0, n, count + 1).astype(np.int64)
-    blocks = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
-    parts = parallel_map(lambda s: _trace_block(scene, camera, origins, dirs, s), blocks, threads=threads)
-    idx, p, n_sh, n_geo, prim, depth, normal = (np.concatenate(a) for a in zip(*parts))
-    return GBuffer(camera, idx, world_position=p, world_normal=n_sh, world_geometric_normal=n_geo,
-                   primitive=prim, _depth=depth, _normal=normal)
+    count = min(H, max(2 * threads, -(-H * W // CHUNK_RAYS)))
+    edges = np.linspace(0, H, count + 1).astype(np.int64)
+    bands = [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+    def band(rows: slice):
+        origins, dirs = camera.primary_rays(dtype=np.float32, rows=rows)
+        part = _trace_block(scene, camera, origins.reshape(-1, 3), dirs.reshape(-1, 3))
+        flat = part["index"] + rows.start * W
+        depth[flat] = part.pop("depth")
+        normal[flat] = part.pop("normal")
+        valid[flat] = True
+        primitive[flat] = part.pop("primitive")
+        part["index"] = flat
+        return part
+
+    parts = parallel_map(band, bands, threads=threads)
+
+    def hits():
+        return {k: np.concatenate([p[k] for p in parts]) for k in
+                ("index", "world_position", "world_normal", "world_geometric_normal")}
+
+    return GBuffer(camera, depth=depth.reshape(H, W), normal=normal.reshape(H, W, 3),
+                   valid=valid.reshape(H, W), primitive=primitive.reshape(H, W), hits=hits)
 
 
-def _trace_block(scene, camera, origins, dirs, block: slice):
-    """Primary hits of the pixels in ``block`` (flat, row-major) and their per-hit data."""
-    hits = scene.tracer.intersect(origins[block], dirs[block], threads=1)
+def _trace_block(scene, camera, origins, dirs) -> dict:
+    """Primary hits of a block of pixels (flat, row-major) and their per-hit data."""
+    hits = scene.tracer.intersect(origins, dirs, threads=1)
     local = np.flatnonzero(hits.primitive >= 0)
     prim = hits.primitive[local]
-    d = dirs[block][local].astype(np.float64)
-    o = camera.eye if camera.is_perspective else origins[block][local].astype(np.float64)
+    d = dirs[local].astype(np.float64)
+    o = camera.eye if camera.is_perspective else origins[local].astype(np.float64)
 
     n_face = scene.face_normals[prim]
     # Hit point: origin + t * direction in float64, then projected onto the triangle's plane
@@ -204,5 +208,7 @@ def _trace_block(scene, camera, origins, dirs, block: slice):
         ok = (length > 0) & (np.einsum("ij,ij->i", ns, d[js]) < 0)
         # where the interpolated normal would face away from the camera, keep the geometric one
         n_sh[js[ok]] = ns[ok] / length[ok, None]
-    depth = (p - camera.eye) @ camera.forward      # linear depth: the view z of the hit
-    return local + block.start, p, n_sh, n_geo, prim, depth, n_sh @ camera.rotation.T
+    return {"index": local, "world_position": p, "world_normal": n_sh, "world_geometric_normal": n_geo,
+            "primitive": prim,
+            "depth": (p - camera.eye) @ camera.forward,   # linear depth: the view z of the hit
+            "normal": n_sh @ camera.rotation.T}

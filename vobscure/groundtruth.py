@@ -121,9 +121,11 @@ def _chunked(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress
 
 def _hemisphere_rays(tracer, points, normals, offset_normals, base, shifts, weighting):
     """float32 origins (P*R, 3), directions (P*R, 3) and directions (P, R, 3), rays of a point contiguous."""
-    dirs = shifted_hemisphere_directions(normals, base, shifts, weighting)     # (P, g, m, 3)
+    # origins p + offset (n + d): Tracer.offset_origins, fused into the direction pass
+    origins, dirs = shifted_hemisphere_directions(normals, base, shifts, weighting,
+                                                  origins=tracer.offset_origins(points, offset_normals),
+                                                  step=tracer.offset)     # (P, g, m, 3) each
     dirs = dirs.reshape(len(points), -1, 3)
-    origins = tracer.offset_origins(points, offset_normals, dirs)
     return origins.reshape(-1, 3), dirs.reshape(-1, 3), dirs
 
 

@@ -80,7 +80,7 @@ def sobol_base(dim: int, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def shifted_hemisphere_directions(normals: np.ndarray, base: np.ndarray, shifts: np.ndarray,
-                                  weighting: str = "cosine") -> np.ndarray:
+                                  weighting: str = "cosine", *, origins=None, step: float = 0.0):
     """World directions of a Cranley-Patterson-shifted 2-D point set, in float32.
 
     Equal (to float32 rounding) to ``to_world(warp((base + shift) mod 1), normals)`` with
@@ -98,10 +98,16 @@ def shifted_hemisphere_directions(normals: np.ndarray, base: np.ndarray, shifts:
     shifts : (P, G, 2) float
         One shift per point and group.
     weighting : {"cosine", "uniform"}
+    origins : (P, 3) float, optional
+        When given, also return ray origins ``origins + step * direction`` per sample,
+        computed in the same pass (see :meth:`vobscure.raytrace.Tracer.offset_origins`).
+    step : float
+        The step along each ray for ``origins``.
 
     Returns
     -------
     (P, G, m, 3) float32
+        The directions; a pair (origins, directions) of such arrays when ``origins`` is given.
     """
     f32 = np.float32
     phi = 2.0 * np.pi * base[:, 1]
@@ -123,9 +129,15 @@ def shifted_hemisphere_directions(normals: np.ndarray, base: np.ndarray, shifts:
     # one contiguous (P, G, m) pass per output component: broadcasting over a trailing
     # axis of length 3 is several times slower
     out = np.empty(u0.shape + (3,), dtype=f32)
+    out_o = None if origins is None else np.empty(u0.shape + (3,), dtype=f32)
+    o32 = None if origins is None else np.asarray(origins, np.float64).astype(f32)
     for k in range(3):
         comp = x * t_rot[:, :, None, k]
         comp += y * b_rot[:, :, None, k]
         comp += z * n32[:, None, None, k]
         out[..., k] = comp
-    return out
+        if out_o is not None:
+            comp *= f32(step)
+            comp += o32[:, None, None, k]
+            out_o[..., k] = comp
+    return out if out_o is None else (out_o, out)
