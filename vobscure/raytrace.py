@@ -268,17 +268,18 @@ class Tracer:
 
             def work(s):
                 res = self._scene.run(o[s], d[s], dists=self._tfar(tfar, s), output=1)
-                prim[s] = res["primID"]
-                dist[s] = res["tfar"]
-                bary[s, 0] = res["u"]
-                bary[s, 1] = res["v"]
+                p = res["primID"]
+                miss = p < 0  # embreex reports -1 (RTC_INVALID_GEOMETRY_ID) for a miss
+                t, u, v = res["tfar"], res["u"], res["v"]
+                t[miss] = np.inf  # embreex leaves tfar (or 1e37) on a miss
+                u[miss] = 0.0
+                v[miss] = 0.0
+                prim[s] = p
+                dist[s] = t
+                bary[s, 0] = u
+                bary[s, 1] = v
 
             self._run(work, chunks, threads)
-            miss = prim < 0  # embreex reports -1 (RTC_INVALID_GEOMETRY_ID) for a miss
-            if miss.any():
-                dist[miss] = np.inf
-                prim[miss] = -1
-                bary[miss] = 0.0
         return Hits(distance=dist, primitive=prim, barycentric=bary)
 
     def hit_points(self, hits: Hits) -> np.ndarray:
