@@ -8,7 +8,7 @@ only as context.
 What is measured (DESIGN.md, "Performance")
 -------------------------------------------
 1. Occlusion throughput, in rays per second, on a real mesh (the Stanford bunny from
-   ``/work/shared/data/meshes``, or a procedural blob when it is missing) and on the
+   ``../shared/data/meshes`` beside the repository, or a procedural blob when it is missing) and on the
    Cornell box, from the visible surface points of a G-buffer (256 x 256; 64 x 64 with
    ``--quick``), 256 rays per point, ``max_distance = RADIUS_FRACTION * scene.extent``.
    The rays are built exactly as :func:`vobscure.ambient_occlusion` builds them (same
@@ -72,7 +72,8 @@ from vobscure.groundtruth import DEFAULT_GROUPS  # noqa: E402
 from vobscure.raytrace import default_threads  # noqa: E402
 from vobscure.sampling import shifted_hemisphere_directions, sobol_base  # noqa: E402
 
-BUNNY = Path("/work/shared/data/meshes/stanford-bunny.obj")
+#: the real meshes live beside the repository, in the workplace's shared folder
+BUNNY = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes" / "stanford-bunny.obj"
 #: AO ray length for the throughput benchmark, as a fraction of the scene's extent.
 RADIUS_FRACTION = 0.1
 #: Rays per point, as in the ground truth's default.
