@@ -14,6 +14,8 @@ from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric
 from .metrics import ErrorReport, error
 from .raytrace import Tracer
 from .scenes import Scene
+from .screenspace import vo_line, vo_point, vo_reference
+from . import patterns
 
 try:
     __version__ = _version("vobscure")
@@ -35,4 +37,8 @@ __all__ = [
     "render_gbuffer",
     "scenes",
     "volumetric_obscurance",
+    "patterns",
+    "vo_line",
+    "vo_point",
+    "vo_reference",
 ]

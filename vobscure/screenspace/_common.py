@@ -1,0 +1,257 @@
+"""Pieces every screen-space estimator shares, each in one place.
+
+- :func:`prepare`: validation of the G-buffer and the common arguments, and the per-pixel
+  quantities (view position p, normal n, projected radius in pixels) of the valid pixels.
+- :func:`sample_pixels`: a view-space offset from p to continuous pixel coordinates.
+- :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
+- :func:`noise`: the small tiled random texture that randomizes patterns per pixel.
+- :func:`warp`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
+
+Conventions (``docs/conventions.md``): view space, z = depth > 0 in front; continuous pixel
+coordinates (x, y) with pixel (i, j) centred at (j + 0.5, i + 0.5). NaN depths are treated
+as background (+inf): the estimators return NaN there and treat such pixels as empty space
+when a sample lands on them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import as_rng, check_choice, check_int, check_positive
+from ..gbuffer import GBuffer
+from ..patterns import SamplePattern, ball, disk
+
+FETCHES = ("nearest", "bilinear")
+OFFSCREEN = ("clamp", "open")
+FALLOFFS = ("constant", "quadratic")
+#: Default edge of the tiled random texture (pixels).
+NOISE_SIZE = 4
+
+
+@dataclass
+class Pixels:
+    """The valid pixels of a G-buffer, flattened: what every estimator loops over."""
+
+    index: np.ndarray        # (k,) flat indices into the (H, W) image
+    center: np.ndarray       # (k, 2) continuous pixel coordinates (x, y) of the centres
+    p: np.ndarray            # (k, 3) view-space positions
+    n: np.ndarray            # (k, 3) view-space unit normals (facing the camera)
+    radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels
+    depth: np.ndarray        # (H, W) the depth buffer (NaN -> +inf), float64 or float32
+    shape: tuple
+    perspective: bool
+    focal: float | None      # pixels per unit at depth 1 (perspective) or per unit (ortho)
+
+
+def as_gbuffer(gbuffer) -> GBuffer:
+    if not isinstance(gbuffer, GBuffer):
+        raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
+    return gbuffer
+
+
+def prepare(gbuffer, radius) -> Pixels:
+    """Validate and gather the per-pixel inputs of the valid (finite-depth) pixels."""
+    gb = as_gbuffer(gbuffer)
+    radius = check_positive(radius, "radius")
+    cam = gb.camera
+    depth = np.where(np.isnan(gb.depth), np.inf, gb.depth)
+    H, W = depth.shape
+    flat = depth.reshape(-1)
+    index = np.flatnonzero(np.isfinite(flat) & (flat > 0))
+    i, j = np.divmod(index, W)
+    center = np.column_stack([j + 0.5, i + 0.5]).astype(np.float64)
+    z = flat[index].astype(np.float64)
+    p = cam.unproject(center, z)
+    n = gb.normal.reshape(-1, 3)[index].astype(np.float64)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    n = np.where(length > 0, n / np.where(length > 0, length, 1.0), np.array([0.0, 0.0, -1.0]))
+    radius_px = radius * np.asarray(cam.pixels_per_unit(z), dtype=np.float64)
+    focal = cam.focal_length_px if cam.is_perspective else H / cam.ortho_height
+    return Pixels(index=index, center=center, p=p, n=n, radius_px=np.broadcast_to(radius_px, z.shape),
+                  depth=depth, shape=(H, W), perspective=cam.is_perspective, focal=float(focal))
+
+
+def as_pattern(samples, dim: int, name: str = "samples") -> SamplePattern:
+    """A count (-> the default symmetric pattern) or a SamplePattern of the right dimension."""
+    if isinstance(samples, SamplePattern):
+        if samples.dim != dim:
+            kind = "disk (n, 2)" if dim == 2 else "ball (n, 3)"
+            raise ValueError(f"{name} must be a {kind} pattern, got points of shape {samples.points.shape}")
+        return samples
+    n = check_int(samples, name)
+    return disk(n) if dim == 2 else ball(n)
+
+
+def check_common(*, fetch="nearest", offscreen="clamp", falloff="constant", thickness=None,
+                 noise_size=NOISE_SIZE):
+    check_choice(fetch, "fetch", FETCHES)
+    check_choice(offscreen, "offscreen", OFFSCREEN)
+    check_choice(falloff, "falloff", FALLOFFS)
+    if thickness is not None:
+        thickness = check_positive(thickness, "thickness")
+    check_int(noise_size, "noise_size")
+    return thickness
+
+
+def noise(px: Pixels, noise_size: int, seed, dim: int, randomize: bool) -> np.ndarray | None:
+    """Per-pixel random unit vectors from a tiled (noise_size x noise_size) texture, or None.
+
+    The estimators reflect their pattern about the vector: a 2-D reflection about a random
+    direction for disks (Loos & Sloan Sec. 4.5), a 3-D reflection (Householder) for balls.
+    Reflections keep a point-symmetric pattern point-symmetric.
+    """
+    if not randomize:
+        return None
+    rng = as_rng(seed)
+    v = rng.normal(size=(noise_size, noise_size, dim))
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    H, W = px.shape
+    i, j = np.divmod(px.index, W)
+    return v[i % noise_size, j % noise_size]
+
+
+def reflect(s: np.ndarray, v: np.ndarray | None, count: int) -> np.ndarray:
+    """One pattern point ``s`` (dim,) as seen by each of ``count`` pixels: (count, dim).
+
+    With per-pixel unit vectors ``v`` (count, dim): the reflection about the line along v
+    in 2-D (2 (s . v) v - s), the Householder reflection about the plane normal to v in
+    3-D (s - 2 (s . v) v). Estimators loop over pattern points and call this once per
+    point, so no (pixels x samples) array is ever built.
+    """
+    if v is None:
+        return np.broadcast_to(s, (count, len(s)))
+    dot = (v @ s)[:, None]
+    if v.shape[1] == 2:
+        return 2.0 * dot * v - s
+    return s - 2.0 * dot * v
+
+
+def sample_pixels(px: Pixels, offset_view: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous pixel coordinates of view points ``p + offset_view`` ((k, 3) each).
+
+    Returns (x, y, z): pixel column/row coordinates and the view depth of the point.
+    """
+    q = px.p + offset_view
+    z = q[:, 2]
+    if px.perspective:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = px.shape[1] / 2.0 + px.focal * q[:, 0] / z
+            y = px.shape[0] / 2.0 - px.focal * q[:, 1] / z
+    else:
+        x = px.shape[1] / 2.0 + px.focal * q[:, 0]
+        y = px.shape[0] / 2.0 - px.focal * q[:, 1]
+    return x, y, z
+
+
+def disk_pixels(px: Pixels, xy: np.ndarray, *, snap: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pixel coordinates of the disk points p + R (x, y, 0) for unit-disk offsets (k, 2).
+
+    With ``snap`` the points move to the centre of the pixel they fall in and the offsets
+    are recomputed from there, so that the line at (x, y) and the depth read for it belong
+    to the same place: a nearest fetch then describes a plane exactly (the depth at a pixel
+    centre is the plane's depth there), and a point-symmetric pattern stays symmetric
+    (rounding an integer-centred offset is odd). Returns x, y and the (k, 2) offsets used.
+    """
+    x = px.center[:, 0] + px.radius_px * xy[:, 0]
+    y = px.center[:, 1] - px.radius_px * xy[:, 1]
+    if not snap:
+        return x, y, xy
+    x = np.floor(x) + 0.5
+    y = np.floor(y) + 0.5
+    xy = np.column_stack([(x - px.center[:, 0]) / px.radius_px, (px.center[:, 1] - y) / px.radius_px])
+    return x, y, xy
+
+
+def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str = "nearest",
+                offscreen: str = "clamp", reciprocal: bool = False) -> np.ndarray:
+    """Depth-buffer values at continuous pixel coordinates (x, y) (float64).
+
+    ``fetch="nearest"``: the pixel containing (x, y). ``"bilinear"``: interpolation between
+    the four nearest pixel centres, of 1/z when ``reciprocal`` (perspective: exact on
+    planes) and of z otherwise; where any of them is background the nearest value is used
+    (interpolating towards +inf would invent geometry).
+    ``offscreen="clamp"``: coordinates outside the image read the nearest border pixel;
+    ``"open"``: they read background (+inf), i.e. empty space. Non-finite coordinates
+    (a point behind a perspective camera) read background.
+    """
+    H, W = depth.shape
+    finite = np.isfinite(x) & np.isfinite(y)
+    xs = np.where(finite, x, 0.0)
+    ys = np.where(finite, y, 0.0)
+    outside = (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H) | ~finite
+    j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+    i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
+    d = depth[i, j].astype(np.float64)
+    if fetch == "bilinear":
+        fx = np.clip(xs - 0.5, 0, W - 1)
+        fy = np.clip(ys - 0.5, 0, H - 1)
+        j0 = np.floor(fx).astype(np.intp)
+        i0 = np.floor(fy).astype(np.intp)
+        j1 = np.minimum(j0 + 1, W - 1)
+        i1 = np.minimum(i0 + 1, H - 1)
+        tx, ty = fx - j0, fy - i0
+        d00, d01, d10, d11 = (depth[a, b].astype(np.float64) for a, b in ((i0, j0), (i0, j1), (i1, j0), (i1, j1)))
+        ok = np.isfinite(d00) & np.isfinite(d01) & np.isfinite(d10) & np.isfinite(d11)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            if reciprocal:
+                # 1/z is affine across the screen on a plane (perspective): interpolate it
+                inv = (1 - ty) * ((1 - tx) / d00 + tx / d01) + ty * ((1 - tx) / d10 + tx / d11)
+                bil = 1.0 / inv
+            else:
+                bil = (1 - ty) * ((1 - tx) * d00 + tx * d01) + ty * ((1 - tx) * d10 + tx * d11)
+        d = np.where(ok, bil, d)
+    if offscreen == "open":
+        d = np.where(outside, np.inf, d)
+    else:
+        d = np.where(finite, d, np.inf)
+    return d
+
+
+def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
+    """View depth -> the line coordinate of the unit sphere around each pixel's point.
+
+    Orthographic: (d - z_p) / R, the paper's mapping. Perspective: (z_p / R) (1 - z_p / d),
+    the same to first order in (d - z_p) / z_p, but exact for planes: 1/d is affine across
+    the screen for a plane, so depths on a plane through p map to an odd function of the
+    disk offset and a point-symmetric pattern sees exactly half of a plane (see
+    ``docs/screenspace.md``). +inf (background) maps to z_p / R (far behind every segment
+    end) in perspective, +inf in orthographic.
+    """
+    z = px.p[:, 2]
+    if px.perspective:
+        with np.errstate(divide="ignore"):
+            return (z / radius) * (1.0 - z / depth)
+    return (depth - z) / radius
+
+
+def tangent_plane_line(px: Pixels, xy: np.ndarray) -> np.ndarray:
+    """Line coordinate where the tangent plane at p crosses the line at disk offset (x, y).
+
+    Loos & Sloan Sec. 4.4 (and footnote 4): in the unit sphere's frame the plane is given by
+    the view-space normal. Orthographic: -(n_x x + n_y y) / n_z. Perspective, in the warped
+    coordinate of :func:`warp`: -z_p (n_x x + n_y y) / (n . p). Grazing normals (denominator
+    -> 0) give +-large values, which the segment clamp turns into "all open" or "all closed".
+    """
+    num = px.n[:, 0] * xy[:, 0] + px.n[:, 1] * xy[:, 1]
+    if px.perspective:
+        den = np.einsum("ij,ij->i", px.n, px.p) / px.p[:, 2]
+    else:
+        den = px.n[:, 2]
+    den = np.minimum(den, -1e-12)   # facing the camera: n . p < 0 (n_z < 0 orthographic)
+    return np.clip(-num / den, -4.0, 4.0)
+
+
+def output(px: Pixels, values: np.ndarray, dtype) -> np.ndarray:
+    """(H, W) image with ``values`` at the valid pixels and NaN elsewhere."""
+    out = np.full(px.shape[0] * px.shape[1], np.nan, dtype=dtype)
+    out[px.index] = values
+    return out.reshape(px.shape)
+
+
+def out_dtype(gbuffer) -> np.dtype:
+    """float32 in, float32 out; float64 otherwise (accumulation is always float64)."""
+    return np.dtype(np.float32) if gbuffer.depth.dtype == np.float32 else np.dtype(np.float64)
+
+
