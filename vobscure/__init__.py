@@ -14,7 +14,7 @@ from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric
 from .metrics import ErrorReport, error
 from .raytrace import Tracer
 from .scenes import Scene
-from .screenspace import vo_line, vo_point, vo_reference
+from .screenspace import bilateral_blur, combine_radii, vo_line, vo_point, vo_reference
 from . import patterns
 
 try:
@@ -31,6 +31,8 @@ __all__ = [
     "Tracer",
     "__version__",
     "ambient_occlusion",
+    "bilateral_blur",
+    "combine_radii",
     "error",
     "ground_truth",
     "obscurance",

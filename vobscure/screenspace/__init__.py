@@ -1,6 +1,7 @@
 """Screen-space estimators of Volumetric Obscurance (Loos & Sloan, I3D 2010)."""
 
+from .blur import bilateral_blur, combine_radii
 from .line import vo_line
 from .point import vo_point, vo_reference
 
-__all__ = ["vo_line", "vo_point", "vo_reference"]
+__all__ = ["bilateral_blur", "combine_radii", "vo_line", "vo_point", "vo_reference"]

@@ -127,7 +127,8 @@ def bilateral_blur(visibility, gbuffer, *, radius_px=4, sigma_spatial=None, sigm
     (0.5, True, True)
     """
     if not isinstance(gbuffer, GBuffer):
-        raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
+        raise ValueError("gbuffer must be a vobscure GBuffer (from render_gbuffer), "
+                         f"got {type(gbuffer).__name__}")
     r = check_int(radius_px, "radius_px", minimum=0)
     sigma_s = r / 2.0 if sigma_spatial is None else check_positive(sigma_spatial, "sigma_spatial")
     sigma_z = check_positive(sigma_depth, "sigma_depth")
@@ -160,7 +161,7 @@ def bilateral_blur(visibility, gbuffer, *, radius_px=4, sigma_spatial=None, sigm
         horizontal = [(0, int(k), w) for k, w in zip(d, g)]
         vertical = [(int(k), 0, w) for k, w in zip(d, g)]
         blurred = _bilateral_pass(values, defined, guide, horizontal)
-        blurred = _bilateral_pass(blurred, defined, guide, vertical)
+        blurred = _bilateral_pass(np.where(defined, blurred, 0.0), defined, guide, vertical)
     out[defined] = blurred[defined]
     return out.astype(out_dtype, copy=False)
 
@@ -172,7 +173,8 @@ def _as_visibility(visibility, shape) -> tuple[np.ndarray, np.dtype]:
         if arr.dtype.kind not in "biuf":
             raise TypeError(f"dtype {arr.dtype}")
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"visibility must be a real numeric array, got {type(visibility).__name__}: {exc}") from None
+        raise ValueError(f"visibility must be a real numeric array, "
+                         f"got {type(visibility).__name__}: {exc}") from None
     if arr.shape != tuple(shape):
         raise ValueError(f"visibility must have the G-buffer's shape {tuple(shape)} (gbuffer.depth.shape), "
                          f"got {arr.shape}")
@@ -207,6 +209,7 @@ def _bilateral_pass(values, defined, guide, offsets) -> np.ndarray:
         z_p = z[p]
         t = (z[q] - z_p) / (sigma_z * z_p)       # relative depth difference in units of sigma_depth
         cos = nx[p] * nx[q] + ny[p] * ny[q] + nz[p] * nz[q]
+        # Tomasi & Manduchi 1998: domain weight g times range weight, here the G-buffer's
         # exp(-t^2 / 2) * exp(-(1 - n_p . n_q) / sigma_n^2) in one exponential
         w = np.exp(-0.5 * t * t - (1.0 - cos) / sigma_n**2)
         w *= g

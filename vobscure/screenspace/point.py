@@ -47,7 +47,7 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
 
 
 def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, thickness=None,
-             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "nearest",
+             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "bilinear",
              offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
     """Volumetric Obscurance by point sampling of the ball (Loos & Sloan 2010, Sec. 4).
 
@@ -69,7 +69,12 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         rho = 1, or 1 - |s|^2 (samples weighted by it and the result normalized).
     randomize : bool
         A random 3-D reflection of the pattern per pixel (Sec. 4.5), from a tiled texture.
-    seed, fetch, offscreen, noise_size
+    fetch : {"bilinear", "nearest"}
+        ``"bilinear"`` (default) reconstructs the surface between pixel centres as planes
+        (interpolating 1/z under perspective), so a sample's occupancy on a plane is exact;
+        ``"nearest"`` reads the pixel's depth as a constant over the pixel (staircase
+        surfaces: a sample just above a tilted plane can read as behind it).
+    seed, offscreen, noise_size
         As in :func:`vobscure.vo_line`.
 
     Returns
@@ -96,7 +101,7 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
 
 
 def vo_reference(gbuffer, *, radius: float, samples: int = 4096, normal_clamp: bool = False,
-                 thickness=None, falloff: str = "constant", seed=0, fetch: str = "nearest",
+                 thickness=None, falloff: str = "constant", seed=0, fetch: str = "bilinear",
                  offscreen: str = "clamp") -> np.ndarray:
     """The converged screen-space VO: dense stratified sampling of the depth-buffer occupancy.
 
