@@ -164,14 +164,49 @@ def disk_pixels(px: Pixels, xy: np.ndarray, *, snap: bool) -> tuple[np.ndarray, 
     return x, y, xy
 
 
+def bilinear_ok(px: Pixels, offsets, *, offscreen: str) -> np.ndarray:
+    """(k,) True where every tap of the pixel can be read bilinearly (no background among
+    the four texels around any tap). ``offsets`` yields the (k, 2) disk offsets of the taps."""
+    ok = np.ones(len(px.index), dtype=bool)
+    for xy in offsets:
+        x, y, _ = disk_pixels(px, xy, snap=False)
+        _, tap_ok = fetch_depth(px.depth, x, y, fetch="bilinear", offscreen=offscreen,
+                                reciprocal=px.perspective, with_mask=True)
+        ok &= tap_ok
+    return ok
+
+
+def fetch_disk(px: Pixels, xy: np.ndarray, *, fetch: str, offscreen: str, bilinear=None):
+    """Depth for the disk points p + R (x, y, 0): returns (depth, the (k, 2) offsets used).
+
+    ``nearest``: the points are snapped to pixel centres (:func:`disk_pixels`).
+    ``bilinear``: the points stay where they are, except at pixels where ``bilinear`` (from
+    :func:`bilinear_ok`) is False, i.e. where some tap would interpolate towards background:
+    all taps of such a pixel are snapped like ``nearest``. Taps of one pixel are treated
+    alike so that a point-symmetric pattern stays symmetric, and the offset and the depth
+    always describe the same place.
+    """
+    if fetch == "nearest":
+        x, y, used = disk_pixels(px, xy, snap=True)
+        return fetch_depth(px.depth, x, y, offscreen=offscreen), used
+    x, y, _ = disk_pixels(px, xy, snap=False)
+    d = fetch_depth(px.depth, x, y, fetch="bilinear", offscreen=offscreen, reciprocal=px.perspective)
+    if bilinear is None or np.all(bilinear):
+        return d, xy
+    xs, ys, snapped = disk_pixels(px, xy, snap=True)
+    d_near = fetch_depth(px.depth, xs, ys, offscreen=offscreen)
+    return np.where(bilinear, d, d_near), np.where(bilinear[:, None], xy, snapped)
+
+
 def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str = "nearest",
-                offscreen: str = "clamp", reciprocal: bool = False) -> np.ndarray:
+                offscreen: str = "clamp", reciprocal: bool = False, with_mask: bool = False):
     """Depth-buffer values at continuous pixel coordinates (x, y) (float64).
 
     ``fetch="nearest"``: the pixel containing (x, y). ``"bilinear"``: interpolation between
     the four nearest pixel centres, of 1/z when ``reciprocal`` (perspective: exact on
     planes) and of z otherwise; where any of them is background the nearest value is used
-    (interpolating towards +inf would invent geometry).
+    (interpolating towards +inf would invent geometry); ``with_mask`` also returns where
+    the bilinear value was used.
     ``offscreen="clamp"``: coordinates outside the image read the nearest border pixel;
     ``"open"``: they read background (+inf), i.e. empty space. Non-finite coordinates
     (a point behind a perspective camera) read background.
@@ -202,11 +237,13 @@ def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str =
             else:
                 bil = (1 - ty) * ((1 - tx) * d00 + tx * d01) + ty * ((1 - tx) * d10 + tx * d11)
         d = np.where(ok, bil, d)
+    else:
+        ok = np.ones(d.shape, dtype=bool)
     if offscreen == "open":
         d = np.where(outside, np.inf, d)
     else:
         d = np.where(finite, d, np.inf)
-    return d
+    return (d, ok | ~finite | (outside & (offscreen == "open"))) if with_mask else d
 
 
 def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:

@@ -114,10 +114,12 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     v = C.noise(px, noise_size, seed, 2, randomize)
     num = np.zeros(k)
     den = np.zeros(k)
+    bilinear = None
+    if fetch == "bilinear":
+        bilinear = C.bilinear_ok(px, (C.reflect(s, v, k) for s in pattern.points), offscreen=offscreen)
     for s, w in zip(pattern.points, pattern.weights):
-        x, y, xy = C.disk_pixels(px, C.reflect(s, v, k), snap=fetch == "nearest")
+        d, xy = C.fetch_disk(px, C.reflect(s, v, k), fetch=fetch, offscreen=offscreen, bilinear=bilinear)
         z_s = np.sqrt(np.maximum(0.0, 1.0 - np.einsum("ij,ij->i", xy, xy)))
-        d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
         d_r = C.warp(px, d, radius)
         # occupied from the surface to the thickness (Sec. 4.3), or to infinity
         occ_hi = np.inf if thickness is None else C.warp(px, d + thickness, radius)
