@@ -41,6 +41,9 @@ class Pixels:
     radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels
     depth: np.ndarray        # (H, W) the depth buffer (NaN -> +inf), float64 or float32
     shape: tuple
+    row: np.ndarray          # (k,) pixel row and column
+    col: np.ndarray
+    depth_flat: np.ndarray   # (H * W,) float64 copy of the depth buffer, for flat gathers
     perspective: bool
     focal: float | None      # pixels per unit at depth 1 (perspective) or per unit (ortho)
 
@@ -69,8 +72,11 @@ def prepare(gbuffer, radius) -> Pixels:
     n = np.where(length > 0, n / np.where(length > 0, length, 1.0), np.array([0.0, 0.0, -1.0]))
     radius_px = radius * np.asarray(cam.pixels_per_unit(z), dtype=np.float64)
     focal = cam.focal_length_px if cam.is_perspective else H / cam.ortho_height
-    return Pixels(index=index, center=center, p=p, n=n, radius_px=np.broadcast_to(radius_px, z.shape),
-                  depth=depth, shape=(H, W), perspective=cam.is_perspective, focal=float(focal))
+    return Pixels(index=index, center=center, p=p, n=n,
+                  radius_px=np.ascontiguousarray(np.broadcast_to(radius_px, z.shape)),
+                  depth=depth, shape=(H, W), row=i, col=j,
+                  depth_flat=np.ascontiguousarray(flat, dtype=np.float64),
+                  perspective=cam.is_perspective, focal=float(focal))
 
 
 def as_pattern(samples, dim: int, name: str = "samples") -> SamplePattern:
@@ -198,6 +204,30 @@ def fetch_disk(px: Pixels, xy: np.ndarray, *, fetch: str, offscreen: str, biline
     return np.where(bilinear, d, d_near), np.where(bilinear[:, None], xy, snapped)
 
 
+def snapped_taps(px: Pixels, ox: np.ndarray, oy: np.ndarray, *, offscreen: str):
+    """Nearest-fetch fast path: depth at the pixels that disk offsets (ox, oy) fall in.
+
+    The same as ``fetch_disk(..., fetch="nearest")`` but on separate, contiguous offset
+    arrays and integer pixel arithmetic: the tap of the pixel at (i0, j0) is
+    (i0 + round(-r oy), j0 + round(r ox)) with r the radius in pixels, and the offsets are
+    recomputed from that pixel's centre. Returns (depth, ox', oy') as float64 arrays.
+    """
+    H, W = px.shape
+    r = px.radius_px
+    dj = np.floor(0.5 + r * ox)
+    di = np.floor(0.5 - r * oy)
+    j = px.col + dj.astype(np.intp)
+    i = px.row + di.astype(np.intp)
+    inside = (j >= 0) & (j < W) & (i >= 0) & (i < H)
+    if inside.all():
+        d = px.depth_flat[i * W + j]
+    else:
+        d = px.depth_flat[np.clip(i, 0, H - 1) * W + np.clip(j, 0, W - 1)]
+        if offscreen == "open":
+            d = np.where(inside, d, np.inf)
+    return d, dj / r, -di / r
+
+
 def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str = "nearest",
                 offscreen: str = "clamp", reciprocal: bool = False, with_mask: bool = False):
     """Depth-buffer values at continuous pixel coordinates (x, y) (float64).
@@ -263,7 +293,7 @@ def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
     return (depth - z) / radius
 
 
-def tangent_plane_line(px: Pixels, xy: np.ndarray) -> np.ndarray:
+def tangent_plane_line(px: Pixels, xy: np.ndarray, *, clip: bool = True) -> np.ndarray:
     """Line coordinate where the tangent plane at p crosses the line at disk offset (x, y).
 
     Loos & Sloan Sec. 4.4 (and footnote 4): in the unit sphere's frame the plane is given by
@@ -277,7 +307,7 @@ def tangent_plane_line(px: Pixels, xy: np.ndarray) -> np.ndarray:
     else:
         den = px.n[:, 2]
     den = np.minimum(den, -1e-12)   # facing the camera: n . p < 0 (n_z < 0 orthographic)
-    return np.clip(-num / den, -4.0, 4.0)
+    return np.clip(-num / den, -4.0, 4.0) if clip else -num / den
 
 
 def output(px: Pixels, values: np.ndarray, dtype) -> np.ndarray:

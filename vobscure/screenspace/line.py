@@ -112,24 +112,42 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     if k == 0:
         return C.output(px, np.zeros(0), dtype)
     v = C.noise(px, noise_size, seed, 2, randomize)
+    vx, vy = (None, None) if v is None else (np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1]))
+    z_p = px.p[:, 2]
+    if normal_clamp:
+        # the tangent plane's line coordinate is linear in the offset: z_plane = gx x + gy y
+        # (Sec. 4.4, footnote 4; C.tangent_plane_line derives the coefficients)
+        gx = C.tangent_plane_line(px, np.tile([1.0, 0.0], (k, 1)), clip=False)
+        gy = C.tangent_plane_line(px, np.tile([0.0, 1.0], (k, 1)), clip=False)
     num = np.zeros(k)
     den = np.zeros(k)
     bilinear = None
     if fetch == "bilinear":
         bilinear = C.bilinear_ok(px, (C.reflect(s, v, k) for s in pattern.points), offscreen=offscreen)
     for s, w in zip(pattern.points, pattern.weights):
-        d, xy = C.fetch_disk(px, C.reflect(s, v, k), fetch=fetch, offscreen=offscreen, bilinear=bilinear)
-        z_s = np.sqrt(np.maximum(0.0, 1.0 - np.einsum("ij,ij->i", xy, xy)))
+        # Sec. 4.5: reflection about a random 2-D direction per pixel: 2 (s . v) v - s
+        if vx is None:
+            ox, oy = np.full(k, s[0]), np.full(k, s[1])
+        else:
+            dot2 = 2.0 * (vx * s[0] + vy * s[1])
+            ox, oy = dot2 * vx - s[0], dot2 * vy - s[1]
+        if fetch == "nearest":
+            d, ox, oy = C.snapped_taps(px, ox, oy, offscreen=offscreen)
+        else:
+            d, xy = C.fetch_disk(px, np.column_stack([ox, oy]), fetch=fetch, offscreen=offscreen,
+                                 bilinear=bilinear)
+            ox, oy = xy[:, 0], xy[:, 1]
+        z_s = np.sqrt(np.maximum(0.0, 1.0 - ox * ox - oy * oy))
         d_r = C.warp(px, d, radius)
         # occupied from the surface to the thickness (Sec. 4.3), or to infinity
         occ_hi = np.inf if thickness is None else C.warp(px, d + thickness, radius)
-        hi = np.minimum(z_s, C.tangent_plane_line(px, xy)) if normal_clamp else z_s
+        hi = np.minimum(z_s, np.clip(gx * ox + gy * oy, -4.0, 4.0)) if normal_clamp else z_s
         unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
         full = _falloff_integral(-z_s, z_s, z_s, falloff)
         ok = full > 0   # a snapped point can leave the disk: it then has no segment
-        safe = np.where(ok, full, 1.0)
-        num += np.where(ok, w * unocc / safe, 0.0)
-        den += np.where(ok, w * total / safe, 0.0)
+        scale = np.where(ok, w / np.where(ok, full, 1.0), 0.0)
+        num += scale * unocc
+        den += scale * total
     # unclamped, den is the weight of the segments that exist (1 unless snapping moved
     # points out of the disk); clamped, it is the half-ball's share seen by the samples
     vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
