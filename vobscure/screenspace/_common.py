@@ -39,7 +39,7 @@ class Pixels:
     p: np.ndarray            # (k, 3) view-space positions
     n: np.ndarray            # (k, 3) view-space unit normals (facing the camera)
     radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels
-    depth: np.ndarray        # (H, W) the depth buffer (NaN -> +inf), float64 or float32
+    depth: np.ndarray        # (H, W) float64 view of the depth buffer (NaN -> +inf)
     shape: tuple
     row: np.ndarray          # (k,) pixel row and column
     col: np.ndarray
@@ -63,6 +63,7 @@ def prepare(gbuffer, radius) -> Pixels:
     H, W = depth.shape
     flat = depth.reshape(-1)
     index = np.flatnonzero(np.isfinite(flat) & (flat > 0))
+    depth64 = np.ascontiguousarray(flat, dtype=np.float64)
     i, j = np.divmod(index, W)
     center = np.column_stack([j + 0.5, i + 0.5]).astype(np.float64)
     z = flat[index].astype(np.float64)
@@ -74,8 +75,7 @@ def prepare(gbuffer, radius) -> Pixels:
     focal = cam.focal_length_px if cam.is_perspective else H / cam.ortho_height
     return Pixels(index=index, center=center, p=p, n=n,
                   radius_px=np.ascontiguousarray(np.broadcast_to(radius_px, z.shape)),
-                  depth=depth, shape=(H, W), row=i, col=j,
-                  depth_flat=np.ascontiguousarray(flat, dtype=np.float64),
+                  depth=depth64.reshape(H, W), shape=(H, W), row=i, col=j, depth_flat=depth64,
                   perspective=cam.is_perspective, focal=float(focal))
 
 
@@ -246,9 +246,10 @@ def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str =
     xs = np.where(finite, x, 0.0)
     ys = np.where(finite, y, 0.0)
     outside = (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H) | ~finite
+    flat = depth.reshape(-1)
     j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
     i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
-    d = depth[i, j].astype(np.float64)
+    d = flat[i * W + j].astype(np.float64, copy=False)
     if fetch == "bilinear":
         fx = np.clip(xs - 0.5, 0, W - 1)
         fy = np.clip(ys - 0.5, 0, H - 1)
@@ -257,7 +258,8 @@ def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str =
         j1 = np.minimum(j0 + 1, W - 1)
         i1 = np.minimum(i0 + 1, H - 1)
         tx, ty = fx - j0, fy - i0
-        d00, d01, d10, d11 = (depth[a, b].astype(np.float64) for a, b in ((i0, j0), (i0, j1), (i1, j0), (i1, j1)))
+        d00, d01, d10, d11 = (flat[a * W + b].astype(np.float64, copy=False)
+                              for a, b in ((i0, j0), (i0, j1), (i1, j0), (i1, j1)))
         ok = np.isfinite(d00) & np.isfinite(d01) & np.isfinite(d10) & np.isfinite(d11)
         with np.errstate(invalid="ignore", divide="ignore"):
             if reciprocal:

@@ -24,16 +24,31 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
     if k == 0:
         return C.output(px, np.zeros(0), dtype)
     v = C.noise(px, noise_size, seed, 3, randomize)
+    vc = None if v is None else [np.ascontiguousarray(v[:, a]) for a in range(3)]
+    nc = [np.ascontiguousarray(px.n[:, a]) for a in range(3)]
+    pc = [np.ascontiguousarray(px.p[:, a]) for a in range(3)]
+    H, W = px.shape
     num = np.zeros(k)
     den = np.zeros(k)
     for s, w in zip(pattern.points, pattern.weights):
-        off = C.reflect(s, v, k)
+        # Sec. 4.5: a random 3-D (Householder) reflection per pixel: s - 2 (s . v) v
+        if vc is None:
+            o = [np.full(k, s[a]) for a in range(3)]
+        else:
+            dot2 = 2.0 * (vc[0] * s[0] + vc[1] * s[1] + vc[2] * s[2])
+            o = [s[a] - dot2 * vc[a] for a in range(3)]
         if normal_clamp:
             # Loos & Sloan Sec. 4.4 (after Filion & McNaughton 2008): samples below the
             # tangent plane are reflected above it
-            dn = np.einsum("ij,ij->i", off, px.n)[:, None]
-            off = off - 2.0 * np.minimum(dn, 0.0) * px.n
-        x, y, z = C.sample_pixels(px, radius * off)
+            m = 2.0 * np.minimum(o[0] * nc[0] + o[1] * nc[1] + o[2] * nc[2], 0.0)
+            o = [o[a] - m * nc[a] for a in range(3)]
+        qx, qy, z = (pc[a] + radius * o[a] for a in range(3))
+        if px.perspective:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                inv = px.focal / z
+                x, y = W / 2.0 + qx * inv, H / 2.0 - qy * inv
+        else:
+            x, y = W / 2.0 + px.focal * qx, H / 2.0 - px.focal * qy
         d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
         # occupied: behind the depth buffer (within the thickness when one is given)
         occupied = (z > d) & (z > 0)
