@@ -54,29 +54,66 @@ def as_gbuffer(gbuffer) -> GBuffer:
     return gbuffer
 
 
-def prepare(gbuffer, radius) -> Pixels:
-    """Validate and gather the per-pixel inputs of the valid (finite-depth) pixels."""
+#: Pixels processed together: the estimators' temporaries scale with this, not with the
+#: image (about 300 bytes a pixel of the chunk), which keeps peak memory per image pixel low.
+CHUNK_PIXELS = 16384
+
+
+def frame(gbuffer, radius):
+    """Validate; the float64 depth buffer (NaN -> +inf), flat, and the valid pixels' indices."""
+    gb = as_gbuffer(gbuffer)
+    check_positive(radius, "radius")
+    flat = np.asarray(gb.depth, dtype=np.float64).reshape(-1)
+    nan = np.isnan(flat)
+    depth64 = np.where(nan, np.inf, flat) if nan.any() else np.ascontiguousarray(flat)
+    index = np.flatnonzero(np.isfinite(depth64) & (depth64 > 0))
+    return gb, depth64, index
+
+
+def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
+    """The per-pixel inputs of the valid (finite-depth) pixels, or of ``index`` only."""
     gb = as_gbuffer(gbuffer)
     radius = check_positive(radius, "radius")
+    if depth64 is None or index is None:
+        _, depth64, all_index = frame(gb, radius)
+        index = all_index if index is None else index
     cam = gb.camera
-    depth = np.where(np.isnan(gb.depth), np.inf, gb.depth)
-    H, W = depth.shape
-    flat = depth.reshape(-1)
-    index = np.flatnonzero(np.isfinite(flat) & (flat > 0))
-    depth64 = np.ascontiguousarray(flat, dtype=np.float64)
+    H, W = gb.depth.shape
     i, j = np.divmod(index, W)
-    center = np.column_stack([j + 0.5, i + 0.5]).astype(np.float64)
-    z = flat[index].astype(np.float64)
+    center = np.empty((len(index), 2))
+    center[:, 0] = j + 0.5
+    center[:, 1] = i + 0.5
+    z = depth64[index]
     p = cam.unproject(center, z)
-    n = gb.normal.reshape(-1, 3)[index].astype(np.float64)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    n = np.where(length > 0, n / np.where(length > 0, length, 1.0), np.array([0.0, 0.0, -1.0]))
+    nflat = gb.normal.reshape(-1, 3)
+    n = np.empty((len(index), 3))
+    for a in range(3):   # column by column: (k, 3) broadcasts run slow 3-element inner loops
+        n[:, a] = nflat[index, a]
+    length = np.sqrt(n[:, 0] ** 2 + n[:, 1] ** 2 + n[:, 2] ** 2)
+    bad = ~(length > 0)
+    length[bad] = 1.0
+    n /= length[:, None]
+    n[bad] = (0.0, 0.0, -1.0)
     radius_px = radius * np.asarray(cam.pixels_per_unit(z), dtype=np.float64)
     focal = cam.focal_length_px if cam.is_perspective else H / cam.ortho_height
     return Pixels(index=index, center=center, p=p, n=n,
                   radius_px=np.ascontiguousarray(np.broadcast_to(radius_px, z.shape)),
                   depth=depth64.reshape(H, W), shape=(H, W), row=i, col=j, depth_flat=depth64,
                   perspective=cam.is_perspective, focal=float(focal))
+
+
+def run_chunks(gbuffer, radius, kernel, dtype) -> np.ndarray:
+    """(H, W) image of ``kernel(px)`` evaluated over chunks of CHUNK_PIXELS valid pixels.
+
+    NaN on background. The estimators' whole per-pixel state lives in one chunk at a time.
+    """
+    gb, depth64, index = frame(gbuffer, radius)
+    H, W = gb.depth.shape
+    out = np.full(H * W, np.nan, dtype=dtype)
+    for a in range(0, len(index), CHUNK_PIXELS):
+        px = prepare(gb, radius, index=index[a:a + CHUNK_PIXELS], depth64=depth64)
+        out[px.index] = kernel(px)
+    return out.reshape(H, W)
 
 
 def as_pattern(samples, dim: int, name: str = "samples") -> SamplePattern:
@@ -101,6 +138,22 @@ def check_common(*, fetch="nearest", offscreen="clamp", falloff="constant", thic
     return thickness
 
 
+def noise_texture(noise_size: int, seed, dim: int, randomize: bool) -> np.ndarray | None:
+    """The (noise_size, noise_size, dim) tile of random unit vectors, or None (no randomization)."""
+    if not randomize:
+        return None
+    v = as_rng(seed).normal(size=(noise_size, noise_size, dim))
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def noise_at(px: Pixels, texture: np.ndarray | None) -> np.ndarray | None:
+    """(k, dim) texture values at the pixels (the tile repeats across the image)."""
+    if texture is None:
+        return None
+    size = texture.shape[0]
+    return texture[px.row % size, px.col % size]
+
+
 def noise(px: Pixels, noise_size: int, seed, dim: int, randomize: bool) -> np.ndarray | None:
     """Per-pixel random unit vectors from a tiled (noise_size x noise_size) texture, or None.
 
@@ -108,14 +161,7 @@ def noise(px: Pixels, noise_size: int, seed, dim: int, randomize: bool) -> np.nd
     direction for disks (Loos & Sloan Sec. 4.5), a 3-D reflection (Householder) for balls.
     Reflections keep a point-symmetric pattern point-symmetric.
     """
-    if not randomize:
-        return None
-    rng = as_rng(seed)
-    v = rng.normal(size=(noise_size, noise_size, dim))
-    v /= np.linalg.norm(v, axis=-1, keepdims=True)
-    H, W = px.shape
-    i, j = np.divmod(px.index, W)
-    return v[i % noise_size, j % noise_size]
+    return noise_at(px, noise_texture(noise_size, seed, dim, randomize))
 
 
 def reflect(s: np.ndarray, v: np.ndarray | None, count: int) -> np.ndarray:
@@ -293,6 +339,16 @@ def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
         with np.errstate(divide="ignore"):
             return (z / radius) * (1.0 - z / depth)
     return (depth - z) / radius
+
+
+def tangent_plane_coefficients(px: Pixels) -> tuple[np.ndarray, np.ndarray]:
+    """(gx, gy) with tangent_plane_line = gx x + gy y (unclipped); see :func:`tangent_plane_line`."""
+    if px.perspective:
+        den = np.einsum("ij,ij->i", px.n, px.p) / px.p[:, 2]
+    else:
+        den = px.n[:, 2].copy()
+    den = np.minimum(den, -1e-12)
+    return -px.n[:, 0] / den, -px.n[:, 1] / den
 
 
 def tangent_plane_line(px: Pixels, xy: np.ndarray, *, clip: bool = True) -> np.ndarray:

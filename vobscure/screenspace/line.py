@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from . import _common as C
@@ -102,23 +104,28 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     >>> round(float(v[4, 4]), 6), round(float(vo.vo_line(gb, radius=0.3, normal_clamp=True)[4, 4]), 6)
     (0.5, 1.0)
     """
-    px = C.prepare(gbuffer, radius)
-    radius = float(radius)
+    C.as_gbuffer(gbuffer)
+    radius = C.check_positive(radius, "radius")
     pattern = C.as_pattern(samples, 2)
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness,
                                noise_size=noise_size)
-    dtype = C.out_dtype(gbuffer)
+    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    kernel = partial(_line_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
+                     thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
+                     texture=texture)
+    return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
+
+
+def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch, offscreen, texture):
+    """Line-sampled VO of one chunk of pixels (see :func:`vo_line`)."""
     k = len(px.index)
-    if k == 0:
-        return C.output(px, np.zeros(0), dtype)
-    v = C.noise(px, noise_size, seed, 2, randomize)
+    v = C.noise_at(px, texture)
     vx, vy = (None, None) if v is None else (np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1]))
-    z_p = px.p[:, 2]
     if normal_clamp:
         # the tangent plane's line coordinate is linear in the offset: z_plane = gx x + gy y
-        # (Sec. 4.4, footnote 4; C.tangent_plane_line derives the coefficients)
-        gx = C.tangent_plane_line(px, np.tile([1.0, 0.0], (k, 1)), clip=False)
-        gy = C.tangent_plane_line(px, np.tile([0.0, 1.0], (k, 1)), clip=False)
+        # (Sec. 4.4, footnote 4; C.tangent_plane_line derives it)
+        gx, gy = C.tangent_plane_coefficients(px)
+    simple = falloff == "constant" and thickness is None
     num = np.zeros(k)
     den = np.zeros(k)
     bilinear = None
@@ -139,11 +146,18 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
             ox, oy = xy[:, 0], xy[:, 1]
         z_s = np.sqrt(np.maximum(0.0, 1.0 - ox * ox - oy * oy))
         d_r = C.warp(px, d, radius)
-        # occupied from the surface to the thickness (Sec. 4.3), or to infinity
-        occ_hi = np.inf if thickness is None else C.warp(px, d + thickness, radius)
         hi = np.minimum(z_s, np.clip(gx * ox + gy * oy, -4.0, 4.0)) if normal_clamp else z_s
-        unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
-        full = _falloff_integral(-z_s, z_s, z_s, falloff)
+        if simple:
+            # Sec. 4.1: max(min(z_s, d_r) + z_s, 0) on the (clipped) segment [-z_s, hi]
+            hi = np.maximum(hi, -z_s)
+            unocc = np.clip(d_r, -z_s, hi) + z_s
+            total = hi + z_s
+            full = 2.0 * z_s
+        else:
+            # occupied from the surface to the thickness (Sec. 4.3), or to infinity
+            occ_hi = np.inf if thickness is None else C.warp(px, d + thickness, radius)
+            unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
+            full = _falloff_integral(-z_s, z_s, z_s, falloff)
         ok = full > 0   # a snapped point can leave the disk: it then has no segment
         scale = np.where(ok, w / np.where(ok, full, 1.0), 0.0)
         num += scale * unocc
@@ -151,4 +165,4 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     # unclamped, den is the weight of the segments that exist (1 unless snapping moved
     # points out of the disk); clamped, it is the half-ball's share seen by the samples
     vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
-    return C.output(px, np.clip(vis, 0.0, 1.0), dtype)
+    return np.clip(vis, 0.0, 1.0)

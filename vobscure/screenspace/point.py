@@ -3,6 +3,8 @@ family the paper compares against) and the converged screen-space reference."""
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .._validate import as_rng, check_int
@@ -15,15 +17,21 @@ __all__ = ["vo_point", "vo_reference"]
 
 def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thickness, falloff,
               randomize, seed, fetch, offscreen, noise_size):
-    px = C.prepare(gbuffer, radius)
-    radius = float(radius)
+    C.as_gbuffer(gbuffer)
+    radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness,
                                noise_size=noise_size)
-    dtype = C.out_dtype(gbuffer)
+    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    kernel = partial(_point_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
+                     thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
+                     texture=texture)
+    return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
+
+
+def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch, offscreen, texture):
+    """Point-sampled VO of one chunk of pixels (see :func:`vo_point`)."""
     k = len(px.index)
-    if k == 0:
-        return C.output(px, np.zeros(0), dtype)
-    v = C.noise(px, noise_size, seed, 3, randomize)
+    v = C.noise_at(px, texture)
     vc = None if v is None else [np.ascontiguousarray(v[:, a]) for a in range(3)]
     nc = [np.ascontiguousarray(px.n[:, a]) for a in range(3)]
     pc = [np.ascontiguousarray(px.p[:, a]) for a in range(3)]
@@ -57,8 +65,7 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
         rho = 1.0 if falloff == "constant" else 1.0 - float(s @ s)   # reflections keep |s|
         num += (w * rho) * ~occupied
         den += w * rho
-    vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
-    return C.output(px, vis, dtype)
+    return np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
 
 
 def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, thickness=None,
