@@ -15,6 +15,7 @@ from .metrics import ErrorReport, error
 from .raytrace import Tracer
 from .scenes import Scene
 from .screenspace import bilateral_blur, combine_radii, vo_line, vo_point, vo_reference
+from .screenspace import vo_area
 from . import patterns
 
 try:
@@ -40,6 +41,7 @@ __all__ = [
     "scenes",
     "volumetric_obscurance",
     "patterns",
+    "vo_area",
     "vo_line",
     "vo_point",
     "vo_reference",

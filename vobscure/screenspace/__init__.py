@@ -1,7 +1,8 @@
 """Screen-space estimators of Volumetric Obscurance (Loos & Sloan, I3D 2010)."""
 
+from .area import vo_area
 from .blur import bilateral_blur, combine_radii
 from .line import vo_line
 from .point import vo_point, vo_reference
 
-__all__ = ["bilateral_blur", "combine_radii", "vo_line", "vo_point", "vo_reference"]
+__all__ = ["bilateral_blur", "combine_radii", "vo_area", "vo_line", "vo_point", "vo_reference"]
