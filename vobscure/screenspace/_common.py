@@ -102,12 +102,13 @@ def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
                   perspective=cam.is_perspective, focal=float(focal))
 
 
-def run_chunks(gbuffer, radius, kernel, dtype) -> np.ndarray:
+def run_chunks(gbuffer, radius, kernel, dtype, *, prepared=None) -> np.ndarray:
     """(H, W) image of ``kernel(px)`` evaluated over chunks of CHUNK_PIXELS valid pixels.
 
     NaN on background. The estimators' whole per-pixel state lives in one chunk at a time.
+    ``prepared``: the result of :func:`frame` when the caller already has it.
     """
-    gb, depth64, index = frame(gbuffer, radius)
+    gb, depth64, index = prepared if prepared is not None else frame(gbuffer, radius)
     H, W = gb.depth.shape
     out = np.full(H * W, np.nan, dtype=dtype)
     for a in range(0, len(index), CHUNK_PIXELS):

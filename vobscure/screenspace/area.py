@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+from functools import partial
+
 import numpy as np
 from scipy import ndimage, special
 from scipy.spatial import cKDTree
@@ -543,22 +545,37 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     >>> round(float(v[4, 4]), 6)
     0.5
     """
-    px = C.prepare(gbuffer, radius)
+    gb, depth64, index = C.frame(gbuffer, radius)
     radius = float(radius)
     pattern = C.as_pattern(samples, 2)
     check_choice(model, "model", MODELS)
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
     thickness = C.check_common(offscreen=offscreen, falloff=falloff, thickness=thickness, noise_size=noise_size)
     dtype = C.out_dtype(gbuffer)
-    k = len(px.index)
-    if k == 0:
-        return C.output(px, np.zeros(0), dtype)
+    H, W = gb.depth.shape
+    if len(index) == 0:
+        return np.full((H, W), np.nan, dtype=dtype)
 
     # Step 1: the moments mip-map of the quantity the line coordinate is affine in
-    finite = np.isfinite(px.depth) & (px.depth > 0)
-    depth = np.where(finite, px.depth, 1.0).astype(np.float64)
-    q = 1.0 / depth if px.perspective else depth
+    depth2 = depth64.reshape(H, W)
+    finite = np.isfinite(depth2) & (depth2 > 0)
+    depth = np.where(finite, depth2, 1.0)
+    q = 1.0 / depth if gb.camera.is_perspective else depth
     pyramid = _Pyramid(q, finite, offscreen=offscreen, prefilter=bool(prefilter), positions=normal_clamp)
+    del depth, q
+    # Step 2 (per sample): the regions' log2 areas are constants (Sec. 4.2)
+    half_log_area = 0.5 * np.log2(region_areas(pattern))
+    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    kernel = partial(_area_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
+                     thickness=thickness, falloff=falloff, model=model, reconstruction=reconstruction,
+                     offscreen=offscreen, pyramid=pyramid, half_log_area=half_log_area, texture=texture)
+    return C.run_chunks(gb, radius, kernel, dtype, prepared=(gb, depth64, index))
+
+
+def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model, reconstruction,
+                 offscreen, pyramid, half_log_area, texture):
+    """Area-sampled VO of one chunk of pixels (see :func:`vo_area`)."""
+    k = len(px.index)
     z_p = px.p[:, 2]
     slope = None
     if normal_clamp:
@@ -593,9 +610,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
 
     # Step 2: one log2 per pixel; the regions' log2 areas are per-sample constants (Sec. 4.2)
     log_r = np.log2(np.maximum(px.radius_px, np.finfo(np.float64).tiny))
-    half_log_area = 0.5 * np.log2(region_areas(pattern))
-
-    noise = C.noise(px, noise_size, seed, 2, randomize)
+    noise = C.noise_at(px, texture)
     num = np.zeros(k)
     den = np.zeros(k)
     for s, w, hla in zip(pattern.points, pattern.weights, half_log_area):
@@ -644,4 +659,4 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         num += np.where(ok, w * unocc / safe, 0.0)
         den += np.where(ok, w * total / safe, 0.0)
     vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
-    return C.output(px, np.clip(vis, 0.0, 1.0), dtype)
+    return np.clip(vis, 0.0, 1.0)
