@@ -55,7 +55,6 @@ The exit code is 0 unless something raises; no timing is asserted.
 from __future__ import annotations
 
 import argparse
-import os
 import platform
 import sys
 import time
@@ -66,8 +65,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source tree
+sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _bench module
 
+import _bench  # noqa: E402
 import vobscure as vo  # noqa: E402
+from _bench import Timing, interleaved, load_average  # noqa: E402
 from vobscure.groundtruth import DEFAULT_GROUPS  # noqa: E402
 from vobscure.raytrace import default_threads  # noqa: E402
 from vobscure.sampling import shifted_hemisphere_directions, sobol_base  # noqa: E402
@@ -98,39 +100,12 @@ FULL = Sizes(points=(256, 256), gbuffer=(512, 512), ground_truth=(512, 512))
 QUICK = Sizes(points=(64, 64), gbuffer=(128, 128), ground_truth=(128, 128))
 
 
-# --------------------------------------------------------------------------- timing
-@dataclass(frozen=True)
-class Timing:
-    seconds: float   # best wall time (time.perf_counter)
-    cores: float     # process CPU time / wall time in that best round: cores actually used
-    result: object   # the callable's return value (last round)
-
-
-def best_of(fns: dict, repeats: int) -> dict:
-    """Best wall time of each callable over ``repeats`` rounds, the callables interleaved
-    round by round so that a change of machine load affects all of them alike."""
-    best = {name: (np.inf, 0.0) for name in fns}
-    result = {}
-    for _ in range(repeats):
-        for name, fn in fns.items():
-            c0, t0 = time.process_time(), time.perf_counter()
-            result[name] = fn()
-            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-            if wall < best[name][0]:
-                best[name] = (wall, cpu / wall)
-    return {name: Timing(*best[name], result[name]) for name in fns}
-
-
-class Report:
-    """Prints table rows as they come and collects the summary lines."""
-
-    def __init__(self):
-        self.summary = []
-
-    @staticmethod
-    def header(title: str):
-        print(f"\n== {title}")
-        print(f"  {'measurement':<50} {'best s':>9} {'cores':>5} {'Mrays/s':>8} {'ratio':>8}")
+# --------------------------------------------------------------------------- report
+class Report(_bench.Report):
+    columns = f"{'measurement':<50} {'best s':>9} {'cores':>5} {'Mrays/s':>8} {'ratio':>8}"
+    summary_title = ("Summary (ratios from this one run; 'cores' columns above show how many\n"
+                     "   cores each measurement actually got on this shared machine)")
+    label_width = 68
 
     @staticmethod
     def row(label: str, timing: Timing | float, rays: int | None = None,
@@ -141,39 +116,10 @@ class Report:
         r = f"{ratio:7.2f}x" if ratio is not None else f"{'':8}"
         print(f"  {label:<50} {seconds:9.4f} {cores} {rate} {r} {note}".rstrip())
 
-    def goal(self, label: str, value: float, goal: float, *, at_least: bool, unit: str = "x"):
-        ok = value >= goal if at_least else value <= goal
-        sign = ">=" if at_least else "<="
-        self.summary.append(f"  {label:<68} {value:8.2f}{unit}  (goal {sign} {goal:g}{unit}: "
-                            f"{'met' if ok else 'MISSED'})")
-
-    def note(self, label: str, value: float, unit: str = "x"):
-        self.summary.append(f"  {label:<68} {value:8.2f}{unit}")
-
-    def print_summary(self):
-        print("\n== Summary (ratios from this one run; 'cores' columns above show how many")
-        print("   cores each measurement actually got on this shared machine)")
-        print("\n".join(self.summary))
-
 
 # --------------------------------------------------------------------------- setup
-def load_average() -> str:
-    return ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-
-
 def machine_facts(threads: int | None):
-    import embreex
-    import scipy
-
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - non-Linux
-        cores = os.cpu_count()
-    print("== Machine")
-    print(f"  cores usable (sched_getaffinity): {cores}   os.cpu_count: {os.cpu_count()}   "
-          f"load average: {load_average()}")
-    print(f"  python {platform.python_version()}   numpy {np.__version__}   scipy {scipy.__version__}   "
-          f"embreex {getattr(embreex, '__version__', '?')}   vobscure {vo.__version__}")
+    _bench.machine_facts("embreex")
     print(f"  vobscure threads: {threads if threads is not None else default_threads()}"
           f"{'' if threads is not None else ' (library default)'}   platform: {platform.platform()}")
 
@@ -238,7 +184,7 @@ def bench_throughput(scene, size, repeats, threads, report: Report):
 
     report.header(f"1. Occlusion throughput: {scene.name}, {len(points)} points x {RAYS} rays "
                   f"= {n} rays, max_distance {radius:.4g} ({RADIUS_FRACTION:g} x extent)")
-    t = best_of({
+    t = interleaved({
         "bare": lambda: embree.run(o32, d32, dists=tfar, query="OCCLUDED"),
         "shuffled": lambda: embree.run(o32s, d32s, dists=tfar, query="OCCLUDED"),
         "split": lambda: split_run(embree, o32, d32, tfar, k),
@@ -246,7 +192,7 @@ def bench_throughput(scene, size, repeats, threads, report: Report):
         "occluded": lambda: tracer.occluded(o32, d32, radius, threads=k),
         "ao_1": lambda: ao(1),
         "ao": lambda: ao(k),
-    }, repeats)
+    }, repeats, statistic="best")
     bare = t["bare"].seconds
 
     def speedup(name):
@@ -326,13 +272,13 @@ def bench_gbuffer(scene, size, repeats, report: Report):
     n = len(o32)
 
     report.header(f"2. G-buffer: {scene.name}, {size[0]}x{size[1]} = {n} primary rays")
-    t = best_of({
+    t = interleaved({
         "bare": lambda: embree.run(o32, d32, output=1),
         "render": lambda: vo.render_gbuffer(scene, camera),
         "all": lambda: _render_all_images(scene, camera),
         "primary": lambda: camera.primary_rays(dtype=np.float32),
         "intersect": lambda: tracer.intersect(o32, d32),
-    }, repeats)
+    }, repeats, statistic="best")
     bare, render = t["bare"].seconds, t["render"].seconds
     rest = max(0.0, render - t["primary"].seconds - t["intersect"].seconds)
     report.row("bare run(output=1), 1 call, 1 thread", t["bare"], n, 1.0, "(baseline)")
@@ -356,8 +302,8 @@ def bench_ground_truth(scene, size, repeats, threads, report: Report):
     n = pixels * RAYS
     report.header(f"3. Ground truth: {scene.name}, {size[0]}x{size[1]}, {pixels} covered pixels "
                   f"x {RAYS} rays = {n} rays, max_distance inf")
-    t = best_of({"gt": lambda: vo.ground_truth(scene, gb, quantity="ao", rays=RAYS, progress=False,
-                                               threads=threads)}, repeats)
+    t = interleaved({"gt": lambda: vo.ground_truth(scene, gb, quantity="ao", rays=RAYS, progress=False,
+                                                   threads=threads)}, repeats, statistic="best")
     seconds = t["gt"].seconds
     report.row("ground_truth(quantity='ao')", t["gt"], n)
     every = size[0] * size[1]

@@ -69,7 +69,6 @@ import dataclasses
 import gc
 import os
 import platform
-import statistics
 import sys
 import time
 import tracemalloc
@@ -81,8 +80,11 @@ from typing import Callable
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source tree
+sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _bench module
 
+import _bench  # noqa: E402
 import vobscure as vo  # noqa: E402
+from _bench import Timing, interleaved, load_average  # noqa: E402
 from vobscure.screenspace import _common as C  # noqa: E402
 
 FULL_SIZES = (512, 1024)
@@ -104,32 +106,6 @@ GOAL_LINE_FLOOR = 1.5
 GOAL_BYTES_PER_PIXEL = 100.0
 #: "not growing with samples": more samples may cost at most this many bytes per pixel more
 GOAL_GROWTH_BYTES = 1.0
-
-
-# --------------------------------------------------------------------------- timing
-@dataclass(frozen=True)
-class Timing:
-    seconds: float   # median wall time (time.perf_counter)
-    cores: float     # process CPU time / wall time in the median round
-    best: float      # best wall time (context)
-
-
-def median_of(fns: dict, repeats: int) -> dict:
-    """Median wall time of each callable over ``repeats`` rounds, the callables interleaved
-    round by round so that a change of machine load affects all of them alike."""
-    runs = {name: [] for name in fns}
-    for _ in range(repeats):
-        for name, fn in fns.items():
-            c0, t0 = time.process_time(), time.perf_counter()
-            fn()
-            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-            runs[name].append((wall, cpu / wall if wall > 0 else 0.0))
-    out = {}
-    for name, r in runs.items():
-        r.sort()
-        wall, cores = r[(len(r) - 1) // 2]          # the lower median: an actual round
-        out[name] = Timing(statistics.median(w for w, _ in r), cores, r[0][0])
-    return out
 
 
 # --------------------------------------------------------------------------- configurations
@@ -355,17 +331,12 @@ def peak_bytes(fn: Callable) -> int:
 
 
 # --------------------------------------------------------------------------- report
-class Report:
-    """Prints table rows as they come and collects the summary lines."""
-
-    def __init__(self):
-        self.summary = []
-
-    @staticmethod
-    def header(title: str):
-        print(f"\n== {title}")
-        print(f"  {'configuration':<22} {'median s':>9} {'cores':>5} {'taps/px':>8} {'reads/px':>9} "
-              f"{'floor s':>8} {'x floor':>8} {'peak B/px':>10}")
+class Report(_bench.Report):
+    columns = (f"{'configuration':<22} {'median s':>9} {'cores':>5} {'taps/px':>8} {'reads/px':>9} "
+               f"{'floor s':>8} {'x floor':>8} {'peak B/px':>10}")
+    summary_title = ("Summary (time ratios are medians from this one run; the 'cores' column above\n"
+                     "   shows how many cores each measurement got on this shared machine)")
+    label_width = 62
 
     @staticmethod
     def row(label, timing: Timing | None, taps=None, reads=None, floor: Timing | None = None,
@@ -379,38 +350,10 @@ class Report:
         p = f"{peak:10.1f}" if peak is not None else f"{'':10}"
         print(f"  {label:<22} {sec} {cores} {t} {r} {fl} {ratio} {p} {note}".rstrip())
 
-    def goal(self, label: str, value: float, goal: float, *, at_least: bool, unit: str = "x"):
-        ok = value >= goal if at_least else value <= goal
-        sign = ">=" if at_least else "<="
-        self.summary.append(f"  {label:<62} {value:8.2f}{unit}  (goal {sign} {goal:g}{unit}: "
-                            f"{'met' if ok else 'MISSED'})")
-
-    def note(self, label: str, value: float, unit: str = "x"):
-        self.summary.append(f"  {label:<62} {value:8.2f}{unit}")
-
-    def print_summary(self):
-        print("\n== Summary (time ratios are medians from this one run; the 'cores' column above")
-        print("   shows how many cores each measurement got on this shared machine)")
-        print("\n".join(self.summary))
-
 
 # --------------------------------------------------------------------------- setup
-def load_average() -> str:
-    return ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-
-
 def machine_facts():
-    import scipy
-
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - non-Linux
-        cores = os.cpu_count()
-    print("== Machine")
-    print(f"  cores usable (sched_getaffinity): {cores}   os.cpu_count: {os.cpu_count()}   "
-          f"load average: {load_average()}")
-    print(f"  python {platform.python_version()}   numpy {np.__version__}   scipy {scipy.__version__}   "
-          f"vobscure {vo.__version__}")
+    _bench.machine_facts()
     threads = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
                if k in os.environ}
     print(f"  platform: {platform.platform()}   BLAS thread variables: {threads or 'unset'}")
@@ -446,7 +389,7 @@ def bench_size(size: int, radius: float, repeats: int, area: Area | None, reads:
         fns[f"floor {T}"] = lambda offsets=offsets: gather_floor(px, offsets)
     for cfg in configs:
         fns[cfg.name] = lambda cfg=cfg: cfg.fn(gb)
-    t = median_of(fns, repeats)
+    t = interleaved(fns, repeats, statistic="median")
 
     peaks = {cfg.name: peak_bytes(lambda cfg=cfg: cfg.fn(gb)) / pixels_all for cfg in configs}
     peaks["prepare"] = peak_bytes(lambda: C.prepare(gb, radius)) / pixels_all
