@@ -5,4 +5,4 @@ runs every figure that way. Figures are drawn on matplotlib ``Figure`` objects w
 canvas (never ``pyplot``, never a display) and written atomically.
 """
 
-__all__ = ["conventions"]
+__all__ = ["conventions", "screenspace_claims"]

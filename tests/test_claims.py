@@ -1,0 +1,151 @@
+"""The claim experiments (vobscure.experiments.claims) and their figure, in quick mode.
+
+Structure only, no timing assertions: every configuration measured for both normal
+settings, finite errors, taps per pixel equal to the sample count, the claims derived from
+the rows, and the figure's PNG written.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+SIZE = (48, 48)
+
+
+@pytest.fixture(scope="module")
+def rows():
+    from vobscure.experiments.claims import line_vs_point
+
+    return line_vs_point("cornell_box", quick=True, size=SIZE)
+
+
+def test_every_configuration_for_both_normal_settings(rows):
+    from vobscure.experiments.claims import CONFIGS
+
+    got = {(r["config"], r["normal_clamp"]) for r in rows}
+    for c in CONFIGS:
+        assert (c.label, False) in got and (c.label, True) in got
+    assert len(got) == len(rows), "one row per (configuration, normal setting)"
+    assert {r["scene"] for r in rows} == {"cornell_box"}
+    assert all(r["size"] == SIZE and r["quick"] for r in rows)
+
+
+def test_errors_are_finite_and_positive(rows):
+    for r in rows:
+        for key in ("rmse_ref", "mae_ref", "rmse_gt", "mae_gt", "rmse_ref_blurred", "gt_stderr_mean"):
+            assert math.isfinite(r[key]) and r[key] >= 0, (r["config"], key, r[key])
+        assert math.isfinite(r["bias_ref"]) and math.isfinite(r["bias_gt"])
+        # RMSE >= MAE >= |bias| for any set of differences
+        assert r["rmse_ref"] >= r["mae_ref"] >= abs(r["bias_ref"]) - 1e-12
+        assert r["rmse_gt"] >= r["mae_gt"] >= abs(r["bias_gt"]) - 1e-12
+        assert r["pixels"] == SIZE[0] * SIZE[1]  # the Cornell box covers every pixel
+        assert r["seconds"] > 0 and len(r["seconds_runs"]) >= 3
+
+
+def test_taps_per_pixel_equal_the_sample_counts(rows):
+    primary = {r["config"]: r for r in rows if r["primary"]}
+    for label, n in (("lines 5", 5), ("lines 9", 9), ("points 12", 12), ("points 33", 33)):
+        assert primary[label]["samples"] == n
+        assert primary[label]["taps_per_pixel"] == n
+    assert primary["lines 9"]["texels_per_pixel"] == 9       # nearest fetch: one texel a tap
+    assert primary["points 12"]["texels_per_pixel"] == 48    # bilinear fetch: four
+
+
+def test_own_limit_of_bilinear_points_is_the_reference(rows):
+    for r in rows:
+        if r["method"] == "point" and r["fetch"] == "bilinear":
+            assert r["limit_rmse_ref"] == 0.0
+            assert r["rmse_limit"] == pytest.approx(r["rmse_ref"])
+        if r["method"] == "line":
+            assert math.isfinite(r["rmse_limit"]) and math.isfinite(r["limit_rmse_ref"])
+
+
+def test_reference_and_ground_truth_settings(rows):
+    from vobscure.experiments.claims import REFERENCE_SAMPLES
+
+    for r in rows:
+        assert r["ref_samples"] == REFERENCE_SAMPLES[True]
+        assert r["gt_samples"] >= 256
+    # the half-ball is mostly open in the Cornell box: the estimators see that too
+    flat = {r["normal_clamp"]: r for r in rows if r["config"] == "points 33"}
+    assert flat[True]["rmse_gt"] < flat[False]["rmse_gt"]
+
+
+def test_claims_are_derived_from_the_rows(rows):
+    from vobscure.experiments.claims import CLAIMS, claims
+
+    out = claims(rows)
+    assert len(out) == 2 * len(CLAIMS)
+    by = {(r["config"], r["normal_clamp"]): r for r in rows}
+    for c in out:
+        a, b = by[(c["lines"], c["normal_clamp"])], by[(c["points"], c["normal_clamp"])]
+        assert c["quality_ref"] == (a["rmse_ref"] <= b["rmse_ref"])
+        assert c["faster"] == (a["seconds"] < b["seconds"])
+        expected = {(True, True): "confirmed", (False, False): "not confirmed"}.get(
+            (c["quality_ref"], c["faster"]), "partly")
+        assert c["verdict"] == expected
+
+
+def test_rows_are_copies(rows):
+    from vobscure.experiments.claims import line_vs_point
+
+    mine = line_vs_point("cornell_box", quick=True, size=SIZE)   # cached: no new measurement
+    assert mine == rows and mine[0] is not rows[0]
+    mine[0]["rmse_ref"] = -1.0
+    again = line_vs_point("cornell_box", quick=True, size=SIZE)
+    assert again[0]["rmse_ref"] == rows[0]["rmse_ref"] >= 0
+
+
+def test_thickness_and_normal_tables(rows):
+    from vobscure.experiments.claims import THICKNESS_FACTORS, normals_on_off, thickness_at_silhouettes
+
+    thick = thickness_at_silhouettes("cornell_box", quick=True, size=SIZE)
+    assert len(thick) == 2 * (1 + len(THICKNESS_FACTORS))
+    assert [t["thickness"] is None for t in thick].count(True) == 2
+    for t in thick:
+        assert t["pixels_band"] > 0 and t["pixels_far"] > 0
+        assert t["pixels_far"] <= t["pixels_band"] < t["pixels_all"]
+        assert math.isfinite(t["rmse_all"]) and math.isfinite(t["rmse_band"])
+    normals = normals_on_off("cornell_box", quick=True, size=SIZE)
+    assert [n["normal_clamp"] for n in normals] == [False, True]
+    assert all(-1 <= n["corr_ao"] <= 1 and math.isfinite(n["rmse_gt"]) for n in normals)
+
+
+def test_silhouette_mask_on_a_step():
+    from vobscure.experiments.claims import silhouette_mask
+
+    d = np.full((6, 10), 2.0)
+    d[:, 5:] = 2.1            # a 5 % step: no silhouette
+    band, far = silhouette_mask(d, width=1)
+    assert not band.any() and not far.any()
+    d[:, 5:] = 3.0            # a 50 % step: band of width 1 on both sides, far side behind
+    band, far = silhouette_mask(d, width=1)
+    assert band[:, 3:7].all() and not band[:, :3].any() and not band[:, 7:].any()
+    assert far[:, 5:7].all() and not far[:, :5].any()
+    d[0, 0] = np.inf          # background is never in the band
+    band, _ = silhouette_mask(d, width=1)
+    assert not band[0, 0] and band[0, 1]
+
+
+def test_bad_scene_name_names_the_valid_ones():
+    from vobscure.experiments.claims import line_vs_point
+
+    with pytest.raises(ValueError, match="cornell_box"):
+        line_vs_point("no_such_scene", quick=True, size=(8, 8))
+
+
+def test_figure_is_written(rows, tmp_path):
+    import matplotlib.image as mpimg
+
+    from vobscure.experiments.figures import screenspace_claims
+
+    paths = screenspace_claims.make(tmp_path, quick=True)
+    assert paths == [tmp_path / "screenspace_claims.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["screenspace_claims.png"]
+    assert paths[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    image = mpimg.imread(paths[0])
+    assert image.ndim == 3 and image.shape[0] >= 600 and image.shape[1] >= 600
+    assert image[..., :3].std() > 0.05

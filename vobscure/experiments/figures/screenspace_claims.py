@@ -1,0 +1,168 @@
+"""The line-versus-point figure: Table 1's configurations as images and as error against time.
+
+One PNG, ``screenspace_claims.png``, that goes with ``docs/results.md``:
+
+(a) the Cornell box, ball VO (``normal_clamp=False``): lines 5, lines 9, points 12, points 33
+    (one frame each, seed 0, no blur), the converged screen-space VO (:func:`vobscure.vo_reference`)
+    and the Embree ground truth, each titled with its RMSE against the reference and the truth;
+(b) the same with the normal (``normal_clamp=True``, the half-ball);
+(c) error against time: RMSE against the converged screen-space VO (the sampling error) over
+    the median seconds per frame, one point per configuration, scene and normal setting;
+(d) the same RMSE over depth taps per pixel (the machine-independent cost);
+(e) RMSE against the ground truth (sampling plus screen-space model error) over seconds.
+
+The numbers come from :func:`vobscure.experiments.claims.line_vs_point`; within one process
+they are the numbers the CLI prints (``python -m vobscure.experiments.claims --figure DIR``).
+
+Regenerate with::
+
+    python -m vobscure.experiments.claims --figure docs/img
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["make", "FILENAME"]
+
+#: Name of the one file :func:`make` writes.
+FILENAME = "screenspace_claims.png"
+
+_DPI = 100
+_BACKGROUND = "#e377c2"     # background pixels (none in the Cornell box; kept for other scenes)
+_COLORS = {"lines 5": "#1f77b4", "lines 9": "#17becf", "points 12": "#d62728", "points 33": "#ff7f0e",
+           "points 12 nearest": "#9467bd", "points 33 nearest": "#8c564b", "area 1": "#2ca02c"}
+_MARKERS = {"cornell_box": "o", "blob": "s"}
+_IMAGE_CONFIGS = ("lines 5", "lines 9", "points 12", "points 33")
+
+
+def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path]:
+    """Draw ``screenspace_claims.png``: Cornell-box images and error against time and taps.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+        Directory to write into; created if missing.
+    quick : bool, optional
+        48 x 48 images and fewer reference samples (seconds), for CI; the panels are the same.
+    size : (int, int), optional
+        Image size; default 256 x 256 (48 x 48 with ``quick``).
+    seed : int, optional
+
+    Returns
+    -------
+    list of Path
+        ``[out_dir / "screenspace_claims.png"]``, written atomically.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from vobscure.experiments.figures import screenspace_claims
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     [p.name for p in screenspace_claims.make(tmp, quick=True, size=(16, 16))]
+    ['screenspace_claims.png']
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from vobscure._io import atomic_write
+    from vobscure.experiments import claims as C
+
+    quick = bool(quick)
+    size = tuple(size) if size is not None else (C.QUICK_SIZE if quick else (256, 256))
+    rows = [r for s in C.SCENES for r in C.line_vs_point(s, size=size, seed=seed, quick=quick)]
+    cornell = C.measurement("cornell_box", size=size, seed=seed, quick=quick)
+
+    fig = Figure(figsize=(16.0, 13.2), dpi=_DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    parts = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 1.25], hspace=0.03)
+    for k, nc in enumerate((False, True)):
+        _image_row(parts[k], cornell, rows, nc, "ab"[k])
+    _scatter_row(parts[2], rows)
+    fig.suptitle(f"Loos & Sloan 2010, Table 1 / Sec. 5.1 on the CPU: lines 5 and 9 against points 12 "
+                 f"and 33 ({size[0]} x {size[1]}, radius 0.1 x scene extent, seed {seed}"
+                 f"{', quick' if quick else ''})", fontsize=13)
+
+    path = Path(out_dir) / FILENAME
+    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi="figure"))
+    return [path]
+
+
+def _image_row(subfig, m, rows, normal_clamp, letter):
+    import matplotlib as mpl
+
+    gray = mpl.colormaps["gray"].with_extremes(bad=_BACKGROUND)
+    by = {r["config"]: r for r in rows if r["scene"] == "cornell_box" and r["normal_clamp"] == normal_clamp}
+    panels = [(c, m.images[(c, normal_clamp)],
+               f"{c}: {by[c]['taps_per_pixel']} taps/px, {1000 * by[c]['seconds']:.0f} ms\n"
+               f"RMSE ref {by[c]['rmse_ref']:.3f}, truth {by[c]['rmse_gt']:.3f}") for c in _IMAGE_CONFIGS]
+    ref_samples = by[_IMAGE_CONFIGS[0]]["ref_samples"]
+    truth = m.truth[normal_clamp]
+    panels.append(("reference", m.reference[normal_clamp],
+                   f"converged screen space\nvo_reference, {ref_samples} samples"))
+    panels.append(("truth", truth.value,
+                   f"Embree ground truth, {truth.samples} pts\nmean stderr {np.nanmean(truth.stderr):.4f}"))
+    axes = subfig.subplots(1, len(panels))
+    for ax, (_, img, title) in zip(axes, panels):
+        im = ax.imshow(np.ma.masked_invalid(img), cmap=gray, vmin=0.0, vmax=1.0, interpolation="nearest")
+        ax.set_title(title, fontsize=9.5)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    subfig.colorbar(im, ax=axes, shrink=0.85, label="visibility (1 = open)")
+    what = ("half-ball VO (normal_clamp=True)" if normal_clamp
+            else "ball VO (normal_clamp=False): the truth is brighter because the walls are only 0.1 thick")
+    subfig.suptitle(f"({letter}) Cornell box, {what}; one frame each, randomized 4 x 4 noise, no blur",
+                    fontsize=11)
+
+
+def _scatter_row(subfig, rows):
+    from matplotlib.lines import Line2D
+
+    from matplotlib.ticker import FormatStrFormatter, LogLocator
+
+    axes = subfig.subplots(1, 3)
+    specs = [("ms", "rmse_ref", "(c) error against the converged screen-space VO, over time",
+              "median milliseconds per frame (NumPy, CPU; log)", "RMSE against vo_reference (log)"),
+             ("taps_per_pixel", "rmse_ref", "(d) the same error over depth taps per pixel",
+              "depth-buffer taps per pixel (machine-independent cost; log)", "RMSE against vo_reference (log)"),
+             ("ms", "rmse_gt", "(e) error against the Embree ground truth, over time",
+              "median milliseconds per frame (NumPy, CPU; log)", "RMSE against ground truth (log)")]
+    rows = [dict(r, ms=1000.0 * r["seconds"]) for r in rows]
+    for ax, (xkey, ykey, title, xlabel, ylabel) in zip(axes, specs):
+        for r in rows:
+            color = _COLORS.get(r["config"], "0.4")
+            marker = _MARKERS.get(r["scene"], "^")
+            filled = not r["normal_clamp"]
+            ax.scatter([r[xkey]], [r[ykey]], s=70 if r["primary"] else 40, marker=marker,
+                       facecolors=color if filled else "white", edgecolors=color, linewidths=1.8,
+                       alpha=1.0 if r["primary"] else 0.75, zorder=3)
+        # join the two claims' partners: lines -> points, per scene and normal setting
+        for scene in dict.fromkeys(r["scene"] for r in rows):
+            for nc in (False, True):
+                by = {r["config"]: r for r in rows if r["scene"] == scene and r["normal_clamp"] == nc}
+                for a, b in (("lines 5", "points 12"), ("lines 9", "points 33")):
+                    if a in by and b in by:
+                        ax.plot([by[a][xkey], by[b][xkey]], [by[a][ykey], by[b][ykey]], color="0.75",
+                                lw=0.8, ls="--" if nc else "-", zorder=1)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+            axis.set_major_formatter(FormatStrFormatter("%g"))
+            axis.set_minor_formatter(FormatStrFormatter(""))
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, fontsize=11)
+        ax.grid(True, which="both", color="0.9", lw=0.6)
+    configs = list(dict.fromkeys(r["config"] for r in rows))
+    handles = [Line2D([], [], ls="", marker="o", ms=8, color=_COLORS.get(c, "0.4"), label=c) for c in configs]
+    handles += [Line2D([], [], ls="", marker=_MARKERS.get(s, "^"), ms=8, mfc="0.3", mec="0.3",
+                       label={"cornell_box": "Cornell box", "blob": "blob"}.get(s, s))
+                for s in dict.fromkeys(r["scene"] for r in rows)]
+    handles += [Line2D([], [], ls="", marker="o", ms=8, mfc="0.3", mec="0.3", label="ball (filled)"),
+                Line2D([], [], ls="", marker="o", ms=8, mfc="white", mec="0.3", mew=1.8,
+                       label="half-ball (hollow)"),
+                Line2D([], [], color="0.75", lw=1.0, label="claim pairs: lines 5-points 12, lines 9-points 33")]
+    subfig.legend(handles=handles, loc="outside lower center", ncol=6, fontsize=9.5, frameon=False)
