@@ -87,7 +87,11 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     -----
     Under a perspective camera the depths are mapped to the sphere's line coordinate with
     the projective warp of :func:`vobscure.screenspace._common.warp` instead of the paper's
-    linear (d - z_p) / R; the two agree to first order and the warp keeps planes exact.
+    linear (d - z_p) / R; the two agree to first order in (d - z_p) / z_p and the warp keeps
+    planes exact. Both read each line's depth along the pixel's line of sight, which for a
+    pixel off the view axis crosses the ball obliquely: the estimate converges to a ball
+    sheared by the off-axis angle, not to :func:`vo_reference` (measured in
+    ``docs/screenspace.md``; the difference shrinks with the field of view, not the radius).
     Depth-buffer taps per pixel: ``samples``.
 
     References
