@@ -15,7 +15,8 @@ when a sample lands on them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -32,12 +33,14 @@ NOISE_SIZE = 4
 
 @dataclass
 class Pixels:
-    """The valid pixels of a G-buffer, flattened: what every estimator loops over."""
+    """The valid pixels of a G-buffer (or a chunk of them), flattened: what estimators loop over.
+
+    ``center`` and ``n`` are computed on first use: an estimator that does not need them
+    (line sampling without the normal, say) never pays for them.
+    """
 
     index: np.ndarray        # (k,) flat indices into the (H, W) image
-    center: np.ndarray       # (k, 2) continuous pixel coordinates (x, y) of the centres
     p: np.ndarray            # (k, 3) view-space positions
-    n: np.ndarray            # (k, 3) view-space unit normals (facing the camera)
     radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels
     depth: np.ndarray        # (H, W) float64 view of the depth buffer (NaN -> +inf)
     shape: tuple
@@ -46,6 +49,28 @@ class Pixels:
     depth_flat: np.ndarray   # (H * W,) float64 copy of the depth buffer, for flat gathers
     perspective: bool
     focal: float | None      # pixels per unit at depth 1 (perspective) or per unit (ortho)
+    normal_image: np.ndarray = field(repr=False, default=None)   # (H * W, 3) view-space normals
+
+    @cached_property
+    def center(self) -> np.ndarray:
+        """(k, 2) continuous pixel coordinates (x, y) of the centres."""
+        c = np.empty((len(self.index), 2))
+        c[:, 0] = self.col + 0.5
+        c[:, 1] = self.row + 0.5
+        return c
+
+    @cached_property
+    def n(self) -> np.ndarray:
+        """(k, 3) view-space unit normals (facing the camera); (0, 0, -1) where none."""
+        n = np.empty((len(self.index), 3))
+        for a in range(3):   # column by column: (k, 3) broadcasts run slow 3-element loops
+            n[:, a] = self.normal_image[self.index, a]
+        length = np.sqrt(n[:, 0] ** 2 + n[:, 1] ** 2 + n[:, 2] ** 2)
+        bad = ~(length > 0)
+        length[bad] = 1.0
+        n /= length[:, None]
+        n[bad] = (0.0, 0.0, -1.0)
+        return n
 
 
 def as_gbuffer(gbuffer) -> GBuffer:
@@ -80,26 +105,22 @@ def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
     cam = gb.camera
     H, W = gb.depth.shape
     i, j = np.divmod(index, W)
-    center = np.empty((len(index), 2))
-    center[:, 0] = j + 0.5
-    center[:, 1] = i + 0.5
     z = depth64[index]
-    p = cam.unproject(center, z)
-    nflat = gb.normal.reshape(-1, 3)
-    n = np.empty((len(index), 3))
-    for a in range(3):   # column by column: (k, 3) broadcasts run slow 3-element inner loops
-        n[:, a] = nflat[index, a]
-    length = np.sqrt(n[:, 0] ** 2 + n[:, 1] ** 2 + n[:, 2] ** 2)
-    bad = ~(length > 0)
-    length[bad] = 1.0
-    n /= length[:, None]
-    n[bad] = (0.0, 0.0, -1.0)
-    radius_px = radius * np.asarray(cam.pixels_per_unit(z), dtype=np.float64)
-    focal = cam.focal_length_px if cam.is_perspective else H / cam.ortho_height
-    return Pixels(index=index, center=center, p=p, n=n,
-                  radius_px=np.ascontiguousarray(np.broadcast_to(radius_px, z.shape)),
-                  depth=depth64.reshape(H, W), shape=(H, W), row=i, col=j, depth_flat=depth64,
-                  perspective=cam.is_perspective, focal=float(focal))
+    p = np.empty((len(index), 3))
+    if cam.is_perspective:
+        f = cam.focal_length_px
+        p[:, 0] = (j + 0.5 - W / 2.0) * (z / f)
+        p[:, 1] = (H / 2.0 - (i + 0.5)) * (z / f)
+        radius_px = (radius * f) / z
+    else:
+        f = H / cam.ortho_height
+        p[:, 0] = (j + 0.5 - W / 2.0) / f
+        p[:, 1] = (H / 2.0 - (i + 0.5)) / f
+        radius_px = np.full(len(index), radius * f)
+    p[:, 2] = z
+    return Pixels(index=index, p=p, radius_px=radius_px, depth=depth64.reshape(H, W), shape=(H, W),
+                  row=i, col=j, depth_flat=depth64, perspective=cam.is_perspective, focal=float(f),
+                  normal_image=gb.normal.reshape(-1, 3))
 
 
 def run_chunks(gbuffer, radius, kernel, dtype, *, prepared=None) -> np.ndarray:
@@ -251,18 +272,49 @@ def fetch_disk(px: Pixels, xy: np.ndarray, *, fetch: str, offscreen: str, biline
     return np.where(bilinear, d, d_near), np.where(bilinear[:, None], xy, snapped)
 
 
-def snapped_taps(px: Pixels, ox: np.ndarray, oy: np.ndarray, *, offscreen: str):
+#: Largest border (pixels) the nearest fast path pads the depth buffer with.
+MAX_PAD = 256
+
+
+class PaddedDepth:
+    """The float64 depth buffer with a border, so that snapped taps need no clipping.
+
+    The border replicates the edge pixels (``offscreen="clamp"``) or holds +inf
+    (``"open"``): reading it is exactly what the off-screen policy prescribes.
+    """
+
+    def __init__(self, depth64: np.ndarray, shape: tuple, pad: int, offscreen: str):
+        H, W = shape
+        img = depth64.reshape(H, W)
+        mode = dict(mode="edge") if offscreen == "clamp" else dict(mode="constant", constant_values=np.inf)
+        self.pad = pad
+        self.width = W + 2 * pad
+        self.flat = np.pad(img, pad, **mode).reshape(-1)
+
+
+def padded_depth(depth64, shape, radius_px_max: float, offscreen: str):
+    """A :class:`PaddedDepth` wide enough for taps within ``radius_px_max``, or None if too wide."""
+    pad = int(np.ceil(radius_px_max)) + 2
+    return PaddedDepth(depth64, shape, pad, offscreen) if pad <= MAX_PAD else None
+
+
+def snapped_taps(px: Pixels, ox: np.ndarray, oy: np.ndarray, *, offscreen: str, padded=None):
     """Nearest-fetch fast path: depth at the pixels that disk offsets (ox, oy) fall in.
 
     The same as ``fetch_disk(..., fetch="nearest")`` but on separate, contiguous offset
     arrays and integer pixel arithmetic: the tap of the pixel at (i0, j0) is
     (i0 + round(-r oy), j0 + round(r ox)) with r the radius in pixels, and the offsets are
-    recomputed from that pixel's centre. Returns (depth, ox', oy') as float64 arrays.
+    recomputed from that pixel's centre. ``padded`` (a :class:`PaddedDepth` covering every
+    tap) replaces the clipping. Returns (depth, ox', oy') as float64 arrays.
     """
     H, W = px.shape
     r = px.radius_px
     dj = np.floor(0.5 + r * ox)
     di = np.floor(0.5 - r * oy)
+    if padded is not None:
+        flat = (px.row + padded.pad) * padded.width + (px.col + padded.pad)
+        d = padded.flat[flat + (di.astype(np.intp) * padded.width + dj.astype(np.intp))]
+        return d, dj / r, -di / r
     j = px.col + dj.astype(np.intp)
     i = px.row + di.astype(np.intp)
     inside = (j >= 0) & (j < W) & (i >= 0) & (i < H)
@@ -340,6 +392,19 @@ def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
         with np.errstate(divide="ignore"):
             return (z / radius) * (1.0 - z / depth)
     return (depth - z) / radius
+
+
+def warper(px: Pixels, radius: float):
+    """:func:`warp` for these pixels as a one-argument function, constants precomputed."""
+    z = px.p[:, 2]
+    if px.perspective:
+        a, b = z / radius, z * z / radius
+
+        def f(depth):
+            with np.errstate(divide="ignore"):
+                return a - b / depth
+        return f
+    return lambda depth: (depth - z) / radius
 
 
 def tangent_plane_coefficients(px: Pixels) -> tuple[np.ndarray, np.ndarray]:

@@ -114,13 +114,22 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness,
                                noise_size=noise_size)
     texture = C.noise_texture(noise_size, seed, 2, randomize)
+    prepared = C.frame(gbuffer, radius)
+    gb, depth64, index = prepared
+    padded = None
+    if fetch == "nearest" and len(index):
+        # the largest projected radius decides how wide a border the taps can reach
+        z_min = float(np.min(depth64[index]))
+        padded = C.padded_depth(depth64, gb.depth.shape, radius * float(gb.camera.pixels_per_unit(z_min)),
+                                offscreen)
     kernel = partial(_line_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
                      thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
-                     texture=texture)
-    return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
+                     texture=texture, padded=padded)
+    return C.run_chunks(gb, radius, kernel, C.out_dtype(gbuffer), prepared=prepared)
 
 
-def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch, offscreen, texture):
+def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch, offscreen, texture,
+                 padded=None):
     """Line-sampled VO of one chunk of pixels (see :func:`vo_line`)."""
     k = len(px.index)
     v = C.noise_at(px, texture)
@@ -130,6 +139,7 @@ def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch
         # (Sec. 4.4, footnote 4; C.tangent_plane_line derives it)
         gx, gy = C.tangent_plane_coefficients(px)
     simple = falloff == "constant" and thickness is None
+    warp = C.warper(px, radius)
     num = np.zeros(k)
     den = np.zeros(k)
     bilinear = None
@@ -143,23 +153,27 @@ def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch
             dot2 = 2.0 * (vx * s[0] + vy * s[1])
             ox, oy = dot2 * vx - s[0], dot2 * vy - s[1]
         if fetch == "nearest":
-            d, ox, oy = C.snapped_taps(px, ox, oy, offscreen=offscreen)
+            d, ox, oy = C.snapped_taps(px, ox, oy, offscreen=offscreen, padded=padded)
         else:
             d, xy = C.fetch_disk(px, np.column_stack([ox, oy]), fetch=fetch, offscreen=offscreen,
                                  bilinear=bilinear)
             ox, oy = xy[:, 0], xy[:, 1]
         z_s = np.sqrt(np.maximum(0.0, 1.0 - ox * ox - oy * oy))
-        d_r = C.warp(px, d, radius)
+        d_r = warp(d)
         hi = np.minimum(z_s, np.clip(gx * ox + gy * oy, -4.0, 4.0)) if normal_clamp else z_s
         if simple:
             # Sec. 4.1: max(min(z_s, d_r) + z_s, 0) on the (clipped) segment [-z_s, hi]
-            hi = np.maximum(hi, -z_s)
+            if normal_clamp:
+                hi = np.maximum(hi, -z_s)
             unocc = np.clip(d_r, -z_s, hi) + z_s
-            total = hi + z_s
-            full = 2.0 * z_s
+            # weight w / (2 z_s); 0 where a snapped point left the disk (no segment)
+            scale = np.divide(0.5 * w, z_s, out=np.zeros(k), where=z_s > 0)
+            num += scale * unocc
+            den += scale * (hi + z_s) if normal_clamp else scale * (2.0 * z_s)
+            continue
         else:
             # occupied from the surface to the thickness (Sec. 4.3), or to infinity
-            occ_hi = np.inf if thickness is None else C.warp(px, d + thickness, radius)
+            occ_hi = np.inf if thickness is None else warp(d + thickness)
             unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
             full = _falloff_integral(-z_s, z_s, z_s, falloff)
         ok = full > 0   # a snapped point can leave the disk: it then has no segment
