@@ -61,3 +61,19 @@ def test_atomic_write_keeps_the_good_file(tmp_path):
         _io.atomic_write(target, interrupted)
     assert target.read_bytes() == good
     assert [p.name for p in tmp_path.iterdir()] == ["result.npz"]  # no temporary left behind
+
+
+def test_open_mesh_volumetric_needs_the_flag(tmp_path, capsys):
+    import trimesh
+
+    box = trimesh.creation.box()
+    box.update_faces(np.arange(len(box.faces)) != 0)  # a hole
+    path = tmp_path / "open.stl"
+    box.export(path)
+    args = ["render", "--scene", str(path), "--quantity", "volumetric", "--size", "8", "8",
+            "--samples", "32", "--radius", "0.3", "--quiet", "--out", str(tmp_path / "out")]
+    assert cli.main(args) == 2
+    assert "--allow-open" in capsys.readouterr().err
+    assert cli.main(args + ["--allow-open"]) == 0
+    with np.load(tmp_path / "out" / "open_volumetric.npz") as data:
+        assert json.loads(str(data["provenance"]))["allow_open"] is True

@@ -40,6 +40,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--samples", type=int, default=1024, help="points per ball for volumetric (default 1024)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
+    r.add_argument("--allow-open", action="store_true",
+                   help="volumetric: accept meshes that are not closed (the inside test may be wrong near holes)")
     r.add_argument("--out", type=Path, default=Path("vobscure-out"), help="output folder (default ./vobscure-out)")
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
@@ -60,7 +62,7 @@ def _load_scene(spec: str):
 
 def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao", radius=None,
            rays: int = 256, samples: int = 1024, seed: int = 0, threads=None,
-           out=Path("vobscure-out"), progress: bool = True) -> dict:
+           out=Path("vobscure-out"), progress: bool = True, allow_open: bool = False) -> dict:
     """Run the render job; returns the provenance record (also stored in the ``.npz``)."""
     import vobscure as vo
 
@@ -73,7 +75,7 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
         radius = DEFAULT_RADIUS_FRACTION * sc.extent
     gb = vo.render_gbuffer(sc, cam)
     ref = vo.ground_truth(sc, gb, quantity=quantity, radius=radius, rays=rays, samples=samples,
-                          seed=seed, progress=progress, threads=threads)
+                          seed=seed, progress=progress, threads=threads, allow_open=allow_open)
     seconds = time.perf_counter() - t0
     out = Path(out)
     provenance = {
@@ -81,7 +83,7 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
         "scene_extent": sc.extent, "triangles": int(len(sc.triangles)), "camera": cam.to_dict(),
         "quantity": quantity, "radius": float(radius), "rays": int(rays), "samples": int(samples),
         "samples_per_pixel": int(ref.samples), "seed": int(seed), "seconds": round(seconds, 3),
-        "valid_pixels": int(gb.valid.sum()),
+        "valid_pixels": int(gb.valid.sum()), "allow_open": bool(allow_open),
     }
     stem = f"{Path(scene_spec).stem}_{quantity}"
     save_npz(out / f"{stem}.npz", provenance, depth=gb.depth, normal=gb.normal, valid=gb.valid,
@@ -135,7 +137,7 @@ def main(argv=None) -> int:
     try:
         record = render(scene=args.scene, size=args.size, quantity=args.quantity, radius=args.radius,
                         rays=args.rays, samples=args.samples, seed=args.seed, threads=args.threads,
-                        out=args.out, progress=not args.quiet)
+                        out=args.out, progress=not args.quiet, allow_open=args.allow_open)
     except (ValueError, FileNotFoundError) as exc:
         print(f"vobscure render: error: {exc}", file=sys.stderr)
         return 2

@@ -309,7 +309,8 @@ def _check_closed(scene: Scene, allow_open: bool) -> None:
     raise ValueError(
         f"volumetric obscurance needs closed, consistently wound meshes to tell inside from outside; "
         f"mesh(es) {bad} are not. Repair them (e.g. trimesh.repair.fill_holes) or pass "
-        f"allow_open=True to accept an inside test that may be wrong near the holes.")
+        f"allow_open=True (`vobscure render --allow-open`) to accept an inside test that may be "
+        f"wrong near the holes.")
 
 
 def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes, groups,
