@@ -123,7 +123,7 @@ def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
                   normal_image=gb.normal.reshape(-1, 3))
 
 
-def run_chunks(gbuffer, radius, kernel, dtype, *, prepared=None) -> np.ndarray:
+def run_chunks(gbuffer, radius, kernel, dtype, *, prepared=None, chunk: int = CHUNK_PIXELS) -> np.ndarray:
     """(H, W) image of ``kernel(px)`` evaluated over chunks of CHUNK_PIXELS valid pixels.
 
     NaN on background. The estimators' whole per-pixel state lives in one chunk at a time.
@@ -132,8 +132,8 @@ def run_chunks(gbuffer, radius, kernel, dtype, *, prepared=None) -> np.ndarray:
     gb, depth64, index = prepared if prepared is not None else frame(gbuffer, radius)
     H, W = gb.depth.shape
     out = np.full(H * W, np.nan, dtype=dtype)
-    for a in range(0, len(index), CHUNK_PIXELS):
-        px = prepare(gb, radius, index=index[a:a + CHUNK_PIXELS], depth64=depth64)
+    for a in range(0, len(index), chunk):
+        px = prepare(gb, radius, index=index[a:a + chunk], depth64=depth64)
         out[px.index] = kernel(px)
     return out.reshape(H, W)
 
