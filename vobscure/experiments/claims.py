@@ -78,9 +78,10 @@ THICKNESS_FACTORS = (0.25, 0.5, 1.0, 2.0)
 #: The headline thickness of the Fig. 5 comparison, a fraction of the radius (see
 #: :func:`thickness_at_silhouettes` for the reason).
 THICKNESS_HEADLINE = 0.5
-#: Depth-buffer texels read per tap: a nearest fetch reads one, a bilinear fetch four, a
-#: trilinear mip-map fetch of the area estimator eight (of three channels).
-TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8}
+#: Depth-buffer texels read per tap: a nearest fetch reads one, a bilinear fetch four; the
+#: area estimator's mip-map lookup reads two levels of 2 x 2 (trilinear) or 3 x 3 (its
+#: default quadratic B-spline) texels, each of three channels.
+TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18}
 
 
 @dataclass(frozen=True)
@@ -100,7 +101,7 @@ class Config:
     @property
     def fetch_used(self) -> str:
         if self.method == "area":
-            return "trilinear"
+            return "bspline"   # vo_area's default reconstruction
         if self.fetch is not None:
             return self.fetch
         return "nearest" if self.method == "line" else "bilinear"
