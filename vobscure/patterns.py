@@ -145,6 +145,17 @@ def _cached(dim: int, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return pts, w
 
 
+def _pattern(dim: int, n, method: str, seed) -> SamplePattern:
+    """The shared body of :func:`disk` (dim 2) and :func:`ball` (dim 3)."""
+    n = check_int(n, "n")
+    check_choice(method, "method", ("lloyd-symmetric",))
+    pts, w = _cached(dim, n, int(seed))
+    return SamplePattern(pts.copy(), w.copy(), method=method,
+                         provenance={"generator": f"vobscure.patterns.{'disk' if dim == 2 else 'ball'}",
+                                     "n": n, "seed": int(seed), "iterations": LLOYD_ITERATIONS,
+                                     "weights_grid": DISK_GRID if dim == 2 else BALL_GRID})
+
+
 def disk(n: int, *, method: str = "lloyd-symmetric", seed: int = 0) -> SamplePattern:
     """A point-symmetric pattern of ``n`` points in the unit disk with footnote-5 weights.
 
@@ -156,12 +167,7 @@ def disk(n: int, *, method: str = "lloyd-symmetric", seed: int = 0) -> SamplePat
     >>> p.points.shape, p.is_symmetric, round(float(p.weights.sum()), 12)
     ((9, 2), True, 1.0)
     """
-    n = check_int(n, "n")
-    check_choice(method, "method", ("lloyd-symmetric",))
-    pts, w = _cached(2, n, int(seed))
-    return SamplePattern(pts.copy(), w.copy(), method=method,
-                         provenance={"generator": "vobscure.patterns.disk", "n": n, "seed": int(seed),
-                                     "iterations": LLOYD_ITERATIONS, "weights_grid": DISK_GRID})
+    return _pattern(2, n, method, seed)
 
 
 def ball(n: int, *, method: str = "lloyd-symmetric", seed: int = 0) -> SamplePattern:
@@ -173,9 +179,4 @@ def ball(n: int, *, method: str = "lloyd-symmetric", seed: int = 0) -> SamplePat
     >>> p.points.shape, p.is_symmetric
     ((12, 3), True)
     """
-    n = check_int(n, "n")
-    check_choice(method, "method", ("lloyd-symmetric",))
-    pts, w = _cached(3, n, int(seed))
-    return SamplePattern(pts.copy(), w.copy(), method=method,
-                         provenance={"generator": "vobscure.patterns.ball", "n": n, "seed": int(seed),
-                                     "iterations": LLOYD_ITERATIONS, "weights_grid": BALL_GRID})
+    return _pattern(3, n, method, seed)

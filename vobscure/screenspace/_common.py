@@ -2,9 +2,11 @@
 
 - :func:`prepare`: validation of the G-buffer and the common arguments, and the per-pixel
   quantities (view position p, normal n, projected radius in pixels) of the valid pixels.
-- :func:`sample_pixels`: a view-space offset from p to continuous pixel coordinates.
+- :func:`run_chunks`: evaluation over chunks of pixels, so memory follows the chunk.
+- :func:`disk_pixels` / :func:`snapped_taps`: disk offsets to pixels (and the nearest taps).
 - :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
-- :func:`noise`: the small tiled random texture that randomizes patterns per pixel.
+- :func:`noise_texture` / :func:`noise_at`: the small tiled random texture that randomizes
+  patterns per pixel.
 - :func:`warp`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
 
 Conventions (``docs/conventions.md``): view space, z = depth > 0 in front; continuous pixel
@@ -176,16 +178,6 @@ def noise_at(px: Pixels, texture: np.ndarray | None) -> np.ndarray | None:
     return texture[px.row % size, px.col % size]
 
 
-def noise(px: Pixels, noise_size: int, seed, dim: int, randomize: bool) -> np.ndarray | None:
-    """Per-pixel random unit vectors from a tiled (noise_size x noise_size) texture, or None.
-
-    The estimators reflect their pattern about the vector: a 2-D reflection about a random
-    direction for disks (Loos & Sloan Sec. 4.5), a 3-D reflection (Householder) for balls.
-    Reflections keep a point-symmetric pattern point-symmetric.
-    """
-    return noise_at(px, noise_texture(noise_size, seed, dim, randomize))
-
-
 def reflect(s: np.ndarray, v: np.ndarray | None, count: int) -> np.ndarray:
     """One pattern point ``s`` (dim,) as seen by each of ``count`` pixels: (count, dim).
 
@@ -200,23 +192,6 @@ def reflect(s: np.ndarray, v: np.ndarray | None, count: int) -> np.ndarray:
     if v.shape[1] == 2:
         return 2.0 * dot * v - s
     return s - 2.0 * dot * v
-
-
-def sample_pixels(px: Pixels, offset_view: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous pixel coordinates of view points ``p + offset_view`` ((k, 3) each).
-
-    Returns (x, y, z): pixel column/row coordinates and the view depth of the point.
-    """
-    q = px.p + offset_view
-    z = q[:, 2]
-    if px.perspective:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x = px.shape[1] / 2.0 + px.focal * q[:, 0] / z
-            y = px.shape[0] / 2.0 - px.focal * q[:, 1] / z
-    else:
-        x = px.shape[1] / 2.0 + px.focal * q[:, 0]
-        y = px.shape[0] / 2.0 - px.focal * q[:, 1]
-    return x, y, z
 
 
 def disk_pixels(px: Pixels, xy: np.ndarray, *, snap: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -387,11 +362,7 @@ def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
     ``docs/screenspace.md``). +inf (background) maps to z_p / R (far behind every segment
     end) in perspective, +inf in orthographic.
     """
-    z = px.p[:, 2]
-    if px.perspective:
-        with np.errstate(divide="ignore"):
-            return (z / radius) * (1.0 - z / depth)
-    return (depth - z) / radius
+    return warper(px, radius)(depth)
 
 
 def warper(px: Pixels, radius: float):
@@ -425,20 +396,9 @@ def tangent_plane_line(px: Pixels, xy: np.ndarray, *, clip: bool = True) -> np.n
     coordinate of :func:`warp`: -z_p (n_x x + n_y y) / (n . p). Grazing normals (denominator
     -> 0) give +-large values, which the segment clamp turns into "all open" or "all closed".
     """
-    num = px.n[:, 0] * xy[:, 0] + px.n[:, 1] * xy[:, 1]
-    if px.perspective:
-        den = np.einsum("ij,ij->i", px.n, px.p) / px.p[:, 2]
-    else:
-        den = px.n[:, 2]
-    den = np.minimum(den, -1e-12)   # facing the camera: n . p < 0 (n_z < 0 orthographic)
-    return np.clip(-num / den, -4.0, 4.0) if clip else -num / den
-
-
-def output(px: Pixels, values: np.ndarray, dtype) -> np.ndarray:
-    """(H, W) image with ``values`` at the valid pixels and NaN elsewhere."""
-    out = np.full(px.shape[0] * px.shape[1], np.nan, dtype=dtype)
-    out[px.index] = values
-    return out.reshape(px.shape)
+    gx, gy = tangent_plane_coefficients(px)
+    z = gx * xy[:, 0] + gy * xy[:, 1]
+    return np.clip(z, -4.0, 4.0) if clip else z
 
 
 def out_dtype(gbuffer) -> np.dtype:
