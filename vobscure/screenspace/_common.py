@@ -3,7 +3,7 @@
 - :func:`prepare`: validation of the G-buffer and the common arguments, and the per-pixel
   quantities (view position p, normal n, projected radius in pixels) of the valid pixels.
 - :func:`run_chunks`: evaluation over chunks of pixels, so memory follows the chunk.
-- :func:`disk_pixels` / :func:`snapped_taps`: disk offsets to pixels (and the nearest taps).
+- :func:`disk_pixels` / :func:`nearest_taps`: disk offsets to pixels (and the nearest taps).
 - :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
 - :func:`noise_texture` / :func:`noise_at`: the small tiled random texture that randomizes
   patterns per pixel.
@@ -273,33 +273,68 @@ def padded_depth(depth64, shape, radius_px_max: float, offscreen: str):
     return PaddedDepth(depth64, shape, pad, offscreen) if pad <= MAX_PAD else None
 
 
-def snapped_taps(px: Pixels, ox: np.ndarray, oy: np.ndarray, *, offscreen: str, padded=None):
-    """Nearest-fetch fast path: depth at the pixels that disk offsets (ox, oy) fall in.
+def padded_base(px: Pixels, padded: PaddedDepth) -> np.ndarray:
+    """(k,) float64 flat index of each pixel of ``px`` in the padded buffer."""
+    return ((px.row + padded.pad) * padded.width + (px.col + padded.pad)).astype(np.float64)
 
-    The same as ``fetch_disk(..., fetch="nearest")`` but on separate, contiguous offset
-    arrays and integer pixel arithmetic: the tap of the pixel at (i0, j0) is
-    (i0 + round(-r oy), j0 + round(r ox)) with r the radius in pixels, and the offsets are
-    recomputed from that pixel's centre. ``padded`` (a :class:`PaddedDepth` covering every
-    tap) replaces the clipping. Returns (depth, ox', oy') as float64 arrays.
+
+def nearest_taps(px: Pixels, dj: np.ndarray, e: np.ndarray, *, offscreen: str, padded=None, base=None,
+                 out: np.ndarray | None = None, scratch: np.ndarray | None = None) -> np.ndarray:
+    """Nearest-fetch fast path: the depth (k,) at integer pixel offsets (dj, e) (floats).
+
+    ``dj`` columns to the right and ``e`` rows *up* (the disk's y axis points up, rows go
+    down) of each pixel of ``px``. ``padded`` (a :class:`PaddedDepth` covering every tap)
+    replaces the clipping: the flat index is computed over float arrays (exact for integers
+    below 2^53) from ``base`` (:func:`padded_base`, computed once per chunk) and gathered by
+    one ``take``. ``out`` and ``scratch`` (float64, (k,)) are reused buffers.
     """
-    H, W = px.shape
-    r = px.radius_px
-    dj = np.floor(0.5 + r * ox)
-    di = np.floor(0.5 - r * oy)
+    k = len(dj)
+    out = np.empty(k) if out is None else out
     if padded is not None:
-        flat = (px.row + padded.pad) * padded.width + (px.col + padded.pad)
-        d = padded.flat[flat + (di.astype(np.intp) * padded.width + dj.astype(np.intp))]
-        return d, dj / r, -di / r
+        scratch = np.empty(k) if scratch is None else scratch
+        base = padded_base(px, padded) if base is None else base
+        np.multiply(e, -float(padded.width), out=scratch)
+        scratch += dj
+        scratch += base
+        np.take(padded.flat, scratch.astype(np.intp), out=out)
+        return out
+    H, W = px.shape
     j = px.col + dj.astype(np.intp)
-    i = px.row + di.astype(np.intp)
+    i = px.row - e.astype(np.intp)
     inside = (j >= 0) & (j < W) & (i >= 0) & (i < H)
     if inside.all():
-        d = px.depth_flat[i * W + j]
+        np.take(px.depth_flat, i * W + j, out=out)
     else:
-        d = px.depth_flat[np.clip(i, 0, H - 1) * W + np.clip(j, 0, W - 1)]
+        np.take(px.depth_flat, np.clip(i, 0, H - 1) * W + np.clip(j, 0, W - 1), out=out)
         if offscreen == "open":
-            d = np.where(inside, d, np.inf)
-    return d, dj / r, -di / r
+            out[~inside] = np.inf
+    return out
+
+
+def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None, *, chunk: int = None):
+    """Chunks of valid pixels that share one texel of the tiled noise texture.
+
+    Yields ``(index, v)``: flat pixel indices and the texel's unit vector (None without
+    randomization, then the chunks are plain runs of valid pixels). Within a chunk every
+    pixel turns the pattern the same way, so the rotated pattern points are scalars and
+    only the per-pixel radius varies: the line estimator's inner loop then does no
+    per-pixel reflection at all.
+    """
+    chunk = CHUNK_PIXELS if chunk is None else chunk
+    H, W = shape
+    valid = (np.isfinite(depth64) & (depth64 > 0)).reshape(H, W)
+    if texture is None:
+        index = np.flatnonzero(valid)
+        for c in range(0, len(index), chunk):
+            yield index[c:c + chunk], None
+        return
+    size = texture.shape[0]
+    for a in range(min(size, H)):
+        for b in range(min(size, W)):
+            ii, jj = np.nonzero(valid[a::size, b::size])
+            index = (a + size * ii) * W + (b + size * jj)
+            for c in range(0, len(index), chunk):
+                yield index[c:c + chunk], texture[a, b]
 
 
 def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str = "nearest",

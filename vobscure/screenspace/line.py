@@ -116,21 +116,129 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     texture = C.noise_texture(noise_size, seed, 2, randomize)
     prepared = C.frame(gbuffer, radius)
     gb, depth64, index = prepared
-    padded = None
-    if fetch == "nearest" and len(index):
-        # the largest projected radius decides how wide a border the taps can reach
-        z_min = float(np.min(depth64[index]))
-        padded = C.padded_depth(depth64, gb.depth.shape, radius * float(gb.camera.pixels_per_unit(z_min)),
-                                offscreen)
-    kernel = partial(_line_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
-                     thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
-                     texture=texture, padded=padded)
-    return C.run_chunks(gb, radius, kernel, C.out_dtype(gbuffer), prepared=prepared)
+    options = dict(radius=radius, normal_clamp=normal_clamp, thickness=thickness, falloff=falloff,
+                   offscreen=offscreen)
+    if fetch == "bilinear":
+        kernel = partial(_line_kernel, pattern=pattern, texture=texture, **options)
+        return C.run_chunks(gb, radius, kernel, C.out_dtype(gbuffer), prepared=prepared)
+    H, W = gb.depth.shape
+    out = np.full(H * W, np.nan, dtype=C.out_dtype(gbuffer))
+    if not len(index):
+        return out.reshape(H, W)
+    # the largest projected radius decides how wide a border the taps can reach
+    z_min = float(np.min(depth64[index]))
+    padded = C.padded_depth(depth64, (H, W), radius * float(gb.camera.pixels_per_unit(z_min)), offscreen)
+    for chunk, v in C.noise_classes(depth64, (H, W), texture):
+        px = C.prepare(gb, radius, index=chunk, depth64=depth64)
+        # Sec. 4.5: reflection about a random 2-D direction per pixel, 2 (s . v) v - s; one
+        # texel of the tiled texture per chunk, so the reflected points are the same for
+        # every pixel of the chunk
+        points = pattern.points if v is None else 2.0 * (pattern.points @ v)[:, None] * v - pattern.points
+        out[chunk] = _line_nearest(px, points=points, weights=pattern.weights, padded=padded, **options)
+    return out.reshape(H, W)
 
 
-def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch, offscreen, texture,
-                 padded=None):
-    """Line-sampled VO of one chunk of pixels (see :func:`vo_line`)."""
+def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded):
+    """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
+
+    Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
+    the depth of the pixel its disk point falls in (the same occupancy test as
+    :func:`vo_reference`). A point-symmetric pattern stays exact on planes: the tap offsets
+    are rounded with ``rint``, an odd function, so antipodal samples read antipodal pixels
+    whose warped depths are opposite on a plane, and the two chords add up to exactly half.
+    With ``normal_clamp`` the tangent plane is crossed at the *tapped* pixel's offset, where
+    the plane's depth was read, so a plane reads exactly 1.
+
+    The inner loop works in place on a few (k,) buffers; the constant parts of the sums
+    (the z_s half of every chord) are accumulated as scalars.
+    """
+    k = len(px.index)
+    r = px.radius_px
+    z = px.p[:, 2]
+    base = C.padded_base(px, padded) if padded is not None else None
+    dj, e, t, d = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
+    num = np.zeros(k)
+    simple = falloff == "constant" and thickness is None
+    den = np.zeros(k) if (normal_clamp or not simple) else None
+    if normal_clamp:
+        # tangent plane crossing z_plane = gx x + gy y (Sec. 4.4, footnote 4), per tap pixel:
+        # x = dj / r, y = e / r
+        gx, gy = C.tangent_plane_coefficients(px)
+        gx, gy = gx / r, gy / r
+    if px.perspective:
+        a, b = z / radius, z * z / radius          # warp: d_r = a - b / d (C.warp)
+    raw = np.empty(k) if thickness is not None else None
+    const = 0.0     # the scalar parts of num and den
+    wsum = 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for (x, y), w in zip(points, weights):
+            z_s2 = 1.0 - x * x - y * y
+            if not z_s2 > 0.0:
+                continue        # a point on the rim has no chord
+            z_s = float(np.sqrt(z_s2))
+            # the pixel the disk point p + R (x, y, 0) falls in
+            np.multiply(r, x, out=dj)
+            np.rint(dj, out=dj)
+            np.multiply(r, y, out=e)
+            np.rint(e, out=e)
+            C.nearest_taps(px, dj, e, offscreen=offscreen, padded=padded, base=base, out=d, scratch=t)
+            if raw is not None:
+                raw[:] = d
+            # depth -> line coordinate d_r of the unit sphere (C.warp)
+            if px.perspective:
+                np.divide(b, d, out=d)
+                np.subtract(a, d, out=d)
+            else:
+                d -= z
+                d *= 1.0 / radius
+            if normal_clamp:
+                np.multiply(gx, dj, out=t)
+                np.multiply(gy, e, out=dj)
+                t += dj
+                np.clip(t, -z_s, z_s, out=t)        # hi: the segment is [-z_s, hi]
+            if simple:
+                k_s = 0.5 * w / z_s                # footnote 5: weight w over the chord 2 z_s
+                if normal_clamp:
+                    # Sec. 4.1 and 4.4: unoccupied = clip(d_r, -z_s, hi) + z_s, total = hi + z_s
+                    np.minimum(d, t, out=d)
+                    np.maximum(d, -z_s, out=d)
+                    d *= k_s
+                    num += d
+                    t *= k_s
+                    den += t
+                else:
+                    # Sec. 4.1: max(min(z_s, d_r) + z_s, 0), as k_s clip(d_r) + w / 2
+                    d *= k_s
+                    np.clip(d, -0.5 * w, 0.5 * w, out=d)
+                    num += d
+                const += k_s * z_s
+                wsum += w
+                continue
+            # occupied from the surface to the thickness (Sec. 4.3), or to infinity
+            if thickness is None:
+                occ_hi = np.inf
+            elif px.perspective:
+                occ_hi = a - b / (raw + thickness)
+            else:
+                occ_hi = (raw + thickness - z) / radius
+            hi = t if normal_clamp else z_s
+            unocc, total = line_integral(-z_s, hi, d, occ_hi, z_s, falloff)
+            scale = w / float(_falloff_integral(-z_s, z_s, z_s, falloff))
+            num += scale * unocc
+            den += scale * np.broadcast_to(total, (k,))
+    if simple and not normal_clamp:
+        return np.clip((num + const) / wsum, 0.0, 1.0) if wsum > 0 else np.ones(k)
+    if simple:
+        num += const
+        den += const
+    # clamped, den is the half-ball's share seen by the samples (0: the whole ball lies
+    # behind the tangent plane, nothing to occlude)
+    vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
+    return np.clip(vis, 0.0, 1.0)
+
+
+def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, offscreen, texture):
+    """Line-sampled VO of one chunk of pixels with the bilinear fetch (see :func:`vo_line`)."""
     k = len(px.index)
     v = C.noise_at(px, texture)
     vx, vy = (None, None) if v is None else (np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1]))
@@ -138,13 +246,10 @@ def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch
         # the tangent plane's line coordinate is linear in the offset: z_plane = gx x + gy y
         # (Sec. 4.4, footnote 4; C.tangent_plane_line derives it)
         gx, gy = C.tangent_plane_coefficients(px)
-    simple = falloff == "constant" and thickness is None
     warp = C.warper(px, radius)
     num = np.zeros(k)
     den = np.zeros(k)
-    bilinear = None
-    if fetch == "bilinear":
-        bilinear = C.bilinear_ok(px, (C.reflect(s, v, k) for s in pattern.points), offscreen=offscreen)
+    bilinear = C.bilinear_ok(px, (C.reflect(s, v, k) for s in pattern.points), offscreen=offscreen)
     for s, w in zip(pattern.points, pattern.weights):
         # Sec. 4.5: reflection about a random 2-D direction per pixel: 2 (s . v) v - s
         if vx is None:
@@ -152,30 +257,16 @@ def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch
         else:
             dot2 = 2.0 * (vx * s[0] + vy * s[1])
             ox, oy = dot2 * vx - s[0], dot2 * vy - s[1]
-        if fetch == "nearest":
-            d, ox, oy = C.snapped_taps(px, ox, oy, offscreen=offscreen, padded=padded)
-        else:
-            d, xy = C.fetch_disk(px, np.column_stack([ox, oy]), fetch=fetch, offscreen=offscreen,
-                                 bilinear=bilinear)
-            ox, oy = xy[:, 0], xy[:, 1]
+        d, xy = C.fetch_disk(px, np.column_stack([ox, oy]), fetch="bilinear", offscreen=offscreen,
+                             bilinear=bilinear)
+        ox, oy = xy[:, 0], xy[:, 1]
         z_s = np.sqrt(np.maximum(0.0, 1.0 - ox * ox - oy * oy))
         d_r = warp(d)
         hi = np.minimum(z_s, np.clip(gx * ox + gy * oy, -4.0, 4.0)) if normal_clamp else z_s
-        if simple:
-            # Sec. 4.1: max(min(z_s, d_r) + z_s, 0) on the (clipped) segment [-z_s, hi]
-            if normal_clamp:
-                hi = np.maximum(hi, -z_s)
-            unocc = np.clip(d_r, -z_s, hi) + z_s
-            # weight w / (2 z_s); 0 where a snapped point left the disk (no segment)
-            scale = np.divide(0.5 * w, z_s, out=np.zeros(k), where=z_s > 0)
-            num += scale * unocc
-            den += scale * (hi + z_s) if normal_clamp else scale * (2.0 * z_s)
-            continue
-        else:
-            # occupied from the surface to the thickness (Sec. 4.3), or to infinity
-            occ_hi = np.inf if thickness is None else warp(d + thickness)
-            unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
-            full = _falloff_integral(-z_s, z_s, z_s, falloff)
+        # occupied from the surface to the thickness (Sec. 4.3), or to infinity
+        occ_hi = np.inf if thickness is None else warp(d + thickness)
+        unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
+        full = _falloff_integral(-z_s, z_s, z_s, falloff)
         ok = full > 0   # a snapped point can leave the disk: it then has no segment
         scale = np.where(ok, w / np.where(ok, full, 1.0), 0.0)
         num += scale * unocc
