@@ -64,14 +64,17 @@ class Pixels:
     @cached_property
     def n(self) -> np.ndarray:
         """(k, 3) view-space unit normals (facing the camera); (0, 0, -1) where none."""
-        n = np.empty((len(self.index), 3))
-        for a in range(3):   # column by column: (k, 3) broadcasts run slow 3-element loops
-            n[:, a] = self.normal_image[self.index, a]
-        length = np.sqrt(n[:, 0] ** 2 + n[:, 1] ** 2 + n[:, 2] ** 2)
+        # stored column by column ((3, k) memory, seen as (k, 3)): the estimators work on
+        # the components one at a time, and contiguous columns make those passes fast
+        n = np.take(self.normal_image, self.index, axis=0).T.copy().T
+        nx, ny, nz = n[:, 0], n[:, 1], n[:, 2]
+        length = np.sqrt(nx * nx + ny * ny + nz * nz)
         bad = ~(length > 0)
-        length[bad] = 1.0
+        if bad.any():
+            length[bad] = 1.0
         n /= length[:, None]
-        n[bad] = (0.0, 0.0, -1.0)
+        if bad.any():
+            n[bad] = (0.0, 0.0, -1.0)
         return n
 
 
@@ -108,7 +111,7 @@ def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
     H, W = gb.depth.shape
     i, j = np.divmod(index, W)
     z = depth64[index]
-    p = np.empty((len(index), 3))
+    p = np.empty((3, len(index))).T      # contiguous columns (see Pixels.n)
     if cam.is_perspective:
         f = cam.focal_length_px
         p[:, 0] = (j + 0.5 - W / 2.0) * (z / f)
@@ -414,13 +417,23 @@ def warper(px: Pixels, radius: float):
 
 
 def tangent_plane_coefficients(px: Pixels) -> tuple[np.ndarray, np.ndarray]:
-    """(gx, gy) with tangent_plane_line = gx x + gy y (unclipped); see :func:`tangent_plane_line`."""
+    """(gx, gy) with tangent_plane_line = gx x + gy y (unclipped); see :func:`tangent_plane_line`.
+
+    The coefficients are ratios of the normal's components, so the normal needs no
+    normalization; only the grazing threshold scales with its length. A missing normal
+    (zero vector) gives gx = gy = 0, as the fallback normal (0, 0, -1) of :attr:`Pixels.n` does.
+    """
+    nn = np.take(px.normal_image, px.index, axis=0).astype(np.float64, copy=False)
+    nx, ny, nz = nn[:, 0], nn[:, 1], nn[:, 2]
     if px.perspective:
-        den = np.einsum("ij,ij->i", px.n, px.p) / px.p[:, 2]
+        # n . p / z_p, with p / z_p = (x / z, y / z, 1) the pixel's ray
+        p = px.p
+        den = (nx * p[:, 0] + ny * p[:, 1]) / p[:, 2] + nz
     else:
-        den = px.n[:, 2].copy()
-    den = np.minimum(den, -1e-12)
-    return -px.n[:, 0] / den, -px.n[:, 1] / den
+        den = nz.copy()
+    length = np.sqrt(nx * nx + ny * ny + nz * nz)
+    np.minimum(den, -1e-12 * np.maximum(length, 1e-300), out=den)
+    return -nx / den, -ny / den
 
 
 def tangent_plane_line(px: Pixels, xy: np.ndarray, *, clip: bool = True) -> np.ndarray:

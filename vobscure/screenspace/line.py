@@ -195,7 +195,8 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 np.multiply(gx, dj, out=t)
                 np.multiply(gy, e, out=dj)
                 t += dj
-                np.clip(t, -z_s, z_s, out=t)        # hi: the segment is [-z_s, hi]
+                np.minimum(t, z_s, out=t)          # hi: the segment is [-z_s, hi]
+                np.maximum(t, -z_s, out=t)
             if simple:
                 k_s = 0.5 * w / z_s                # footnote 5: weight w over the chord 2 z_s
                 if normal_clamp:
