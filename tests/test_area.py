@@ -494,3 +494,36 @@ def test_bad_arguments(crease_ortho, kwargs, name):
         vo_area(np.ones((4, 4)), radius=0.3)
     with pytest.raises(ValueError, match="model"):
         area_integral(-1, 1, 0, 0.1, 1, model="uniform")
+
+
+def test_pyramid_slope_lookup_matches_a_pixel_mixture():
+    """The clamped pyramid (positions, level 0 implicit) against a brute-force mixture of the
+    level-0 pixels: a trilinear lookup at level L is a mixture of the finite pixels, each
+    weighted by its texel's tent weight over the texel's finite pixels."""
+    rng = np.random.default_rng(4)
+    H, W = 16, 12
+    q = rng.uniform(1.0, 2.0, (H, W))
+    finite = rng.random((H, W)) < 0.8
+    pyr = _Pyramid(q, finite, offscreen="clamp", prefilter=False, positions=True)
+    assert pyr.skip == H * W                    # positions and moments start at level 1
+    X, Y = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    for x, y, lod in ((5.3, 7.9, 0.0), (4.1, 6.6, 1.0), (6.2, 8.4, 0.4), (5.5, 7.0, 1.7)):
+        g = rng.normal(size=2) * 0.1
+        weights = np.zeros((H, W))
+        L0 = int(np.floor(lod))
+        for L, wl in ((L0, 1 - (lod - L0)), (L0 + 1, lod - L0)):
+            s = 2 ** L
+            fx, fy = x / s - 0.5, y / s - 0.5
+            j0, i0 = int(np.floor(fx)), int(np.floor(fy))
+            for i, wy in ((i0, 1 - (fy - i0)), (i0 + 1, fy - i0)):
+                for j, wx in ((j0, 1 - (fx - j0)), (j0 + 1, fx - j0)):
+                    block = (slice(i * s, (i + 1) * s), slice(j * s, (j + 1) * s))
+                    weights[block] += wl * wy * wx * finite[block] / s ** 2
+        carried = q - g[0] * (X - x) - g[1] * (Y - y)
+        expect_mean = np.sum(weights * carried) / weights.sum()
+        expect_var = np.sum(weights * (carried - expect_mean) ** 2) / weights.sum()
+        cov, mean, var = pyr.lookup(np.array([x]), np.array([y]), np.array([lod]), "clamp", "trilinear",
+                                    slope=(np.array([g[0]]), np.array([g[1]])))
+        assert cov[0] == pytest.approx(weights.sum(), rel=1e-12)
+        assert mean[0] == pytest.approx(expect_mean, rel=1e-12)
+        assert var[0] == pytest.approx(expect_var, rel=1e-9)

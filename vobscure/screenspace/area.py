@@ -243,9 +243,28 @@ class _Pyramid:
 
     def __init__(self, q: np.ndarray, finite: np.ndarray, *, offscreen: str, prefilter: bool,
                  positions: bool = False):
+        q = np.asarray(q, dtype=np.float64)
+        self._build(lambda out: np.copyto(out, q), finite, offscreen=offscreen, prefilter=prefilter,
+                    positions=positions)
+
+    @classmethod
+    def from_depth(cls, depth: np.ndarray, finite: np.ndarray, *, perspective: bool, offscreen: str,
+                   prefilter: bool, positions: bool = False):
+        """The pyramid of q = 1/z (perspective) or z, written straight into level 0 (no copy of
+        the image besides the pyramid's own)."""
+        def fill(out):
+            np.copyto(out, depth)
+            out[~finite] = 1.0
+            if perspective:
+                np.reciprocal(out, out=out)
+        self = cls.__new__(cls)
+        self._build(fill, finite, offscreen=offscreen, prefilter=prefilter, positions=positions)
+        return self
+
+    def _build(self, fill, finite, *, offscreen, prefilter, positions):
         # the levels' sizes, then one flat array per channel holding every level, filled
         # level by level (no list of levels plus a concatenated copy: half the peak memory)
-        shapes = [q.shape]
+        shapes = [finite.shape]
         while shapes[-1] != (1, 1):
             h, w = shapes[-1]
             shapes.append(((h + 1) // 2, (w + 1) // 2))
@@ -256,26 +275,40 @@ class _Pyramid:
         self.offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp)
         n_chan = 3 if positions else 1
         total = int(sizes.sum())
+        # Without the prefilter, level 0 of the positions and of every central moment is
+        # implicit: a pixel is a point at its centre (X = j + 0.5, Y = i + 0.5, no spread).
+        # Those channels start at level 1 (``skip`` texels later), which saves 8 of the
+        # 10 full-size channels of the clamped pyramid.
+        self.skip = 0 if prefilter else int(sizes[0])
         self.c = np.empty(total)
         #: means of q (, X, Y) and central moments in ``_pairs`` order: qq (, qX, qY, XX, XY, YY)
-        self.m = [np.empty(total) for _ in range(n_chan)]
-        self.v = [np.empty(total) for _ in _pairs(n_chan)]
+        self.m = [np.empty(total)] + [np.empty(total - self.skip) for _ in range(n_chan - 1)]
+        self.v = [np.empty(total - self.skip) for _ in _pairs(n_chan)]
+        self.positions = positions
+        H0, W0 = shapes[0]
 
         def level(L):
             a, b = self.offsets[L], self.offsets[L] + sizes[L]
             shape = shapes[L]
-            return (self.c[a:b].reshape(shape), [x[a:b].reshape(shape) for x in self.m],
-                    [x[a:b].reshape(shape) for x in self.v])
+            if L == 0 and self.skip:
+                # the implicit channels as views of no memory
+                X = np.broadcast_to(np.arange(W0) + 0.5, shape)
+                Y = np.broadcast_to((np.arange(H0) + 0.5)[:, None], shape)
+                return self.c[a:b].reshape(shape), [self.m[0][a:b].reshape(shape), X, Y][:n_chan], \
+                    [None] * len(self.v)
+            m = [self.m[0][a:b].reshape(shape)] + [x[a - self.skip:b - self.skip].reshape(shape)
+                                                   for x in self.m[1:]]
+            return (self.c[a:b].reshape(shape), m,
+                    [x[a - self.skip:b - self.skip].reshape(shape) for x in self.v])
 
         c0, m0, v0 = level(0)
         c0[...] = finite
-        m0[0][...] = np.where(finite, q, 0.0)
-        if positions:
-            m0[1][...] = np.where(finite, np.arange(q.shape[1]) + 0.5, 0.0)
-            m0[2][...] = np.where(finite, (np.arange(q.shape[0]) + 0.5)[:, None], 0.0)
-        for x in v0:
-            x[...] = 0.0
+        fill(m0[0])
+        m0[0][~finite] = 0.0
         if prefilter:
+            if positions:
+                m0[1][...] = np.where(finite, np.arange(W0) + 0.5, 0.0)
+                m0[2][...] = np.where(finite, (np.arange(H0) + 0.5)[:, None], 0.0)
             c, m, v = _prefilter(c0, [x.copy() for x in m0], finite, offscreen)
             c0[...] = c
             for dst, src in zip(m0 + v0, list(m) + list(v)):
@@ -287,9 +320,20 @@ class _Pyramid:
             cL[...] = c
             for dst, src in zip(mL + vL, list(m) + list(v)):
                 dst[...] = src
-        self.positions = positions
+            del c, m, v
 
-    def lookup(self, x, y, lod, offscreen, reconstruction, slope=None):
+    def _channel(self, arr, flat, level0, virtual):
+        """Texels ``flat`` of a channel stored from level 1 on; ``virtual`` where ``level0``."""
+        if not self.skip:
+            return arr.take(flat)
+        if arr.size == 0:      # a 1 x 1 image: level 0 is the only level
+            return np.zeros(flat.shape) if virtual is None else np.asarray(virtual, dtype=np.float64)
+        got = arr.take(np.maximum(flat - self.skip, 0))
+        if virtual is None:
+            return np.where(level0, 0.0, got)
+        return np.where(level0, virtual, got)
+
+    def lookup(self, x, y, lod, offscreen, reconstruction, slope=None, ref=None):
         """(coverage, mean, variance) at continuous pixel coordinates (x, y) and level ``lod``.
 
         Texel j of level L has its centre at (j + 0.5) 2^L in level-0 pixels. Within each
@@ -297,7 +341,9 @@ class _Pyramid:
         (``"trilinear"``: 2 x 2 taps, bilinear) or a quadratic B-spline (``"bspline"``: 3 x 3
         taps); the two levels are blended linearly. The texels are combined as a mixture of
         distributions, each weighted by filter weight x coverage: the filtered moments
-        M1, M2 of Sec. 4.2, with the variance M2 - M1^2 evaluated without cancellation.
+        M1, M2 of Sec. 4.2, accumulated about ``ref`` (a value near the mean, e.g. the
+        pixel's own q; default the first tap's mean) so that the variance
+        M2 - M1^2 loses nothing to cancellation, in one pass over the taps.
 
         ``slope`` = (g_x, g_y), per lookup (needs ``positions``): the moments are those of
         q - g_x (X - x) - g_y (Y - y) instead of q, each texel's depth carried along a
@@ -315,10 +361,11 @@ class _Pyramid:
         L0 = np.floor(lod).astype(np.intp)
         t = lod - L0
         L1 = np.minimum(L0 + 1, self.top)
-        taps = []
+        cov = s1 = s2 = 0.0
         for L, wl in ((L0, np.where(finite, 1.0 - t, 0.0)), (L1, np.where(finite, t, 0.0))):
             scale = np.ldexp(1.0, -L)
             H, W, off = self.heights[L], self.widths[L], self.offsets[L]
+            level0 = L == 0
             fx = x * scale - 0.5           # in texel-centre units of level L
             fy = y * scale - 0.5
             if offscreen == "clamp":       # clamp to edge: the border texels extend outward
@@ -327,31 +374,39 @@ class _Pyramid:
             else:                          # taps off the image are empty (weight 0)
                 fx = np.minimum(np.maximum(fx, -3.0), W + 2.0)
                 fy = np.minimum(np.maximum(fy, -3.0), H + 2.0)
-            rows = [(off + np.minimum(np.maximum(i, 0), H - 1) * W,
-                     wl * (wy if offscreen == "clamp" else np.where((i >= 0) & (i < H), wy, 0.0)))
-                    for i, wy in _filter_taps(fy, reconstruction)]
+            rows = []
+            for i, wy in _filter_taps(fy, reconstruction):
+                ic = np.minimum(np.maximum(i, 0), H - 1)
+                rows.append((ic, off + ic * W,
+                             wl * (wy if offscreen == "clamp" else np.where((i >= 0) & (i < H), wy, 0.0))))
             cols = [(np.minimum(np.maximum(j, 0), W - 1),
                      wx if offscreen == "clamp" else np.where((j >= 0) & (j < W), wx, 0.0))
                     for j, wx in _filter_taps(fx, reconstruction)]
-            for row, wy in rows:
-                for col, wx in cols:
-                    flat = row + col
+            for ic, row, wy in rows:
+                for jc, wx in cols:
+                    flat = row + jc
                     a = wy * wx * self.c.take(flat)
                     if slope is None:
-                        taps.append((a, self.m[0].take(flat), self.v[0].take(flat)))
-                        continue
-                    gx, gy = slope
-                    mean = (self.m[0].take(flat) - gx * (self.m[1].take(flat) - x)
-                            - gy * (self.m[2].take(flat) - y))
-                    qq, qx, qy, xx, xy, yy = (s.take(flat) for s in self.v)
-                    var = qq - 2.0 * (gx * qx + gy * qy) + gx * gx * xx + 2.0 * gx * gy * xy + gy * gy * yy
-                    taps.append((a, mean, np.maximum(var, 0.0)))   # >= 0 but for rounding
-        # two passes (Chan et al.): the mean, then the central moment about it
-        cov = sum(a for a, _, _ in taps)
+                        mean = self.m[0].take(flat)
+                        var = self._channel(self.v[0], flat, level0, None)
+                    else:
+                        gx, gy = slope
+                        mx = self._channel(self.m[1], flat, level0, jc + 0.5)
+                        my = self._channel(self.m[2], flat, level0, ic + 0.5)
+                        mean = self.m[0].take(flat) - gx * (mx - x) - gy * (my - y)
+                        qq, qx, qy, xx, xy, yy = (self._channel(s, flat, level0, None) for s in self.v)
+                        var = qq - 2.0 * (gx * qx + gy * qy) + gx * gx * xx + 2.0 * gx * gy * xy + gy * gy * yy
+                        var = np.maximum(var, 0.0)   # >= 0 but for rounding
+                    if ref is None:
+                        ref = mean.copy()
+                    dm = mean - ref
+                    cov = cov + a
+                    s1 = s1 + a * dm
+                    s2 = s2 + a * (var + dm * dm)
         safe = np.where(cov > 0, cov, 1.0)
-        mean = sum(a * m for a, m, _ in taps) / safe
-        var = sum(a * (v + (m - mean) ** 2) for a, m, v in taps) / safe
-        return cov, mean, var
+        mu = s1 / safe
+        var = np.maximum(s2 / safe - mu * mu, 0.0)
+        return cov, mu + ref, var
 
 
 def _pairs(d):
@@ -408,7 +463,7 @@ def _reduce(c, m, v, offscreen):
         mode = "edge" if offscreen == "clamp" else "constant"
         c = np.pad(c, pad, mode=mode)
         m = [np.pad(a, pad, mode=mode) for a in m]
-        v = [np.pad(a, pad, mode=mode) for a in v]
+        v = [None if a is None else np.pad(a, pad, mode=mode) for a in v]
     parts = [(i, j) for i in (0, 1) for j in (0, 1)]
     cs = [c[i::2, j::2] for i, j in parts]
     csum = sum(cs)
@@ -417,7 +472,9 @@ def _reduce(c, m, v, offscreen):
     # Chan et al.: S = sum_k c_k (S_k + (m_k - m)(m_k - m)^T) / sum_k c_k
     moments = []
     for s, (p, q) in zip(v, _pairs(len(m))):
-        moments.append(sum(ck * (s[i::2, j::2] + (m[p][i::2, j::2] - means[p]) * (m[q][i::2, j::2] - means[q]))
+        # s None: the texels are points (level 0 without the prefilter)
+        moments.append(sum(ck * ((0.0 if s is None else s[i::2, j::2])
+                                 + (m[p][i::2, j::2] - means[p]) * (m[q][i::2, j::2] - means[q]))
                            for ck, (i, j) in zip(cs, parts)) / safe)
     return 0.25 * csum, means, moments
 
@@ -584,10 +641,8 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     # Step 1: the moments mip-map of the quantity the line coordinate is affine in
     depth2 = depth64.reshape(H, W)
     finite = np.isfinite(depth2) & (depth2 > 0)
-    depth = np.where(finite, depth2, 1.0)
-    q = 1.0 / depth if gb.camera.is_perspective else depth
-    pyramid = _Pyramid(q, finite, offscreen=offscreen, prefilter=bool(prefilter), positions=normal_clamp)
-    del depth, q
+    pyramid = _Pyramid.from_depth(depth2, finite, perspective=gb.camera.is_perspective, offscreen=offscreen,
+                                  prefilter=bool(prefilter), positions=normal_clamp)
     # Step 2 (per sample): the regions' log2 areas are constants (Sec. 4.2)
     half_log_area = 0.5 * np.log2(region_areas(pattern))
     texture = C.noise_texture(noise_size, seed, 2, randomize)
@@ -637,6 +692,7 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
 
     # Step 2: one log2 per pixel; the regions' log2 areas are per-sample constants (Sec. 4.2)
     log_r = np.log2(np.maximum(px.radius_px, np.finfo(np.float64).tiny))
+    q_p = 1.0 / z_p if px.perspective else z_p
     noise = C.noise_at(px, texture)
     num = np.zeros(k)
     den = np.zeros(k)
@@ -647,7 +703,9 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
         lod = np.clip(log_r + hla - LOD_BIAS[reconstruction], 0.0, pyramid.top)
         # Step 3: the filtered moments at the region's centre; clamped, of the depth
         # carried along the tangent plane to this line (see ``slope`` above)
-        cov, mean, var = pyramid.lookup(x, y, lod, offscreen, reconstruction, slope=slope)
+        # accumulated about the pixel's own q (carried along the tangent plane when clamped)
+        ref = q_p if slope is None else q_p + slope[0] * (x - px.center[:, 0]) + slope[1] * (y - px.center[:, 1])
+        cov, mean, var = pyramid.lookup(x, y, lod, offscreen, reconstruction, slope=slope, ref=ref)
         sd = np.sqrt(var)
         # Step 4: to the line coordinate (the warp is affine in the mipped quantity)
         if px.perspective:
