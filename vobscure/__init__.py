@@ -16,7 +16,7 @@ from .raytrace import Tracer
 from .scenes import Scene
 from .screenspace import bilateral_blur, combine_radii, vo_line, vo_point, vo_reference
 from .screenspace import vo_area
-from . import patterns
+from . import experiments, patterns
 
 try:
     __version__ = _version("vobscure")
@@ -35,6 +35,7 @@ __all__ = [
     "bilateral_blur",
     "combine_radii",
     "error",
+    "experiments",
     "ground_truth",
     "obscurance",
     "render_gbuffer",

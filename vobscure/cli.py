@@ -1,5 +1,9 @@
 """The ``vobscure`` command.
 
+``vobscure compare`` (the main job) measures the screen-space estimators on one scene against
+the references a request names: error, time and taps per pixel, the error decomposition, and
+optionally temporal flicker over a camera orbit (:mod:`vobscure.experiments.compare`).
+``vobscure figures`` regenerates the paper figures (:mod:`vobscure.experiments.figures`).
 ``vobscure render`` renders a G-buffer of a scene and its ray-cast reference (AO,
 obscurance or world-space VO) and writes depth, normal and visibility PNGs plus an ``.npz``
 with every array and a provenance record. ``vobscure scenes`` lists the built-in scenes.
@@ -45,7 +49,111 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=Path, default=Path("vobscure-out"), help="output folder (default ./vobscure-out)")
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
+
+    c = sub.add_parser("compare", help="error, time and taps per pixel of the screen-space estimators",
+                       description="Measure the screen-space estimators on one scene against the requested "
+                                   "references; write results.csv, results.md, tradeoff.png, gallery.png "
+                                   "and provenance.json.")
+    c.add_argument("--scene", default=DEFAULT_SCENE, help=f"built-in scene or mesh file (default {DEFAULT_SCENE})")
+    c.add_argument("--camera", default=None, metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
+                   help="eye and target (and vertical field of view in degrees); default the scene's camera")
+    c.add_argument("--size", nargs=2, type=int, metavar=("W", "H"), default=None,
+                   help="image size (default 256 256; 64 64 with --quick)")
+    c.add_argument("--radius", type=float, nargs="+", default=None,
+                   help="one or more ball radii (default 0.1 x the scene extent)")
+    c.add_argument("--methods", default=None,
+                   help="comma-separated NAME:SAMPLES, NAME in point, line, area "
+                        "(default point:12,point:33,line:5,line:9,area:1)")
+    c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
+    c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")
+    c.add_argument("--reference", nargs="+", default=None, choices=("screen", "volumetric", "ao", "obscurance"),
+                   help="references to compute (default screen volumetric ao)")
+    c.add_argument("--repeats", type=int, default=3, help="timed runs per configuration, median kept (default 3)")
+    c.add_argument("--rays", type=int, default=256, help="rays per pixel of ao/obscurance (default 256)")
+    c.add_argument("--samples", type=int, default=1024, help="ball samples of the world-space VO (default 1024)")
+    c.add_argument("--screen-samples", type=int, default=2048,
+                   help="samples of the converged screen-space VO (default 2048)")
+    c.add_argument("--orbit", type=int, default=0, metavar="N", help="N-frame camera orbit: temporal flicker")
+    c.add_argument("--seed", type=int, default=0)
+    c.add_argument("--quick", action="store_true", help="small and fast (under two minutes)")
+    c.add_argument("--out", type=Path, default=None, help="output folder (default ./vobscure-out/compare-<scene>)")
+    c.add_argument("--cache", type=Path, default=None, help="reference cache folder (default: user cache)")
+    c.add_argument("--no-cache", action="store_true", help="recompute every reference, write no cache")
+    c.add_argument("--quiet", action="store_true", help="no progress bars or summary")
+
+    f = sub.add_parser("figures", help="regenerate the paper figures",
+                       description="Regenerate figures (one module each in vobscure.experiments.figures).")
+    f.add_argument("names", nargs="*", default=["all"], metavar="NAME", help="figure names or 'all' (default)")
+    f.add_argument("--quick", action="store_true", help="small and fast versions (what CI runs)")
+    f.add_argument("--out", type=Path, default=Path("vobscure-out") / "figures", help="output folder")
+    f.add_argument("--list", action="store_true", help="list the figure names and exit")
     return p
+
+
+def _camera_arg(spec: str, size):
+    from .camera import Camera
+
+    parts = [p for p in spec.replace(" ", "").split(",") if p]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) not in (6, 7):
+        raise ValueError(f"--camera must be EX,EY,EZ,TX,TY,TZ[,FOV] (6 or 7 numbers), got {spec!r}")
+    fov = values[6] if len(values) == 7 else 45.0
+    return Camera.look_at(values[:3], values[3:6], size=tuple(size), fov_y=fov)
+
+
+def _compare_main(args) -> int:
+    from .experiments.compare import DEFAULT_METHODS, DEFAULT_REFERENCES, DEFAULT_SIZE, QUICK_SIZE, compare
+
+    size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else DEFAULT_SIZE)
+    camera = _camera_arg(args.camera, size) if args.camera else None
+    cache = False if args.no_cache else (args.cache if args.cache is not None else True)
+    result = compare(args.scene, camera=camera, size=size, radii=args.radius,
+                     methods=args.methods or DEFAULT_METHODS, normal_clamp=args.normals,
+                     thickness=args.thickness, references=tuple(args.reference or DEFAULT_REFERENCES),
+                     repeats=args.repeats, rays=args.rays, samples=args.samples,
+                     screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit, quick=args.quick,
+                     out=args.out, cache=cache, progress=not args.quiet)
+    if not args.quiet:
+        primary = result.provenance["primary_reference"]
+        print(f"{result.provenance['scene']}: {len(result.rows)} configurations, "
+              f"{result.provenance['seconds']:.1f} s; RMSE against {primary}:")
+        for row in result.rows:
+            extra = f", flicker {row['flicker']:+.4f}" if "flicker" in row else ""
+            print(f"  {row['method']:>5s}:{row['samples']:<3d} R={row['radius']:.3g}  "
+                  f"{row['seconds'] * 1e3:8.1f} ms  {row['taps_per_pixel']:3d} taps/px  "
+                  f"RMSE {row[primary + '_rmse']:.4f}{extra}")
+        for path in result.files.values():
+            print(f"  wrote {path}")
+    return 0
+
+
+def _figures_main(args) -> int:
+    from .experiments import figures
+
+    registry = getattr(figures, "FIGURES", {name: name for name in figures.__all__})
+    if args.list:
+        for name in registry:
+            print(name)
+        return 0
+    names = None if args.names in ([], ["all"]) else args.names
+    unknown = [n for n in (names or []) if n not in registry]
+    if unknown:
+        raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of {', '.join(registry)}")
+    if hasattr(figures, "make_all"):
+        paths = figures.make_all(args.out, quick=args.quick, names=names)
+    else:  # pragma: no cover - the registry always has make_all
+        import importlib
+
+        paths = []
+        for name in names or list(registry):
+            mod = importlib.import_module(f"vobscure.experiments.figures.{registry[name]}")
+            paths += mod.make(args.out, quick=args.quick)
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
 
 
 def _load_scene(spec: str):
@@ -134,6 +242,12 @@ def main(argv=None) -> int:
             doc = (getattr(scenes, name).__doc__ or "").strip().splitlines()
             print(f"{name:16s} {doc[0] if doc else ''}")
         return 0
+    if args.command in ("compare", "figures"):
+        try:
+            return _compare_main(args) if args.command == "compare" else _figures_main(args)
+        except (ValueError, FileNotFoundError) as exc:
+            print(f"vobscure {args.command}: error: {exc}", file=sys.stderr)
+            return 2
     try:
         record = render(scene=args.scene, size=args.size, quantity=args.quantity, radius=args.radius,
                         rays=args.rays, samples=args.samples, seed=args.seed, threads=args.threads,
