@@ -204,7 +204,7 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
             normal_clamp: bool = False, thickness=None, references=DEFAULT_REFERENCES, repeats: int = 3,
             rays: int = 256, samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
             orbit: int = 0, quick: bool = False, out=None, cache=True, progress: bool = True,
-            plots: bool = True) -> CompareResult:
+            plots: bool = True, write: bool = True) -> CompareResult:
     """Measure error, time and taps per pixel of screen-space estimators on one scene.
 
     Parameters
@@ -236,13 +236,14 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     quick : bool
         64 x 64, one repeat, fewer rays and samples: the whole run in seconds.
     out : path, optional
-        Output folder; default ``./vobscure-out/compare-<scene>``. None with ``plots=False``
-        and no ``out`` writes nothing.
+        Output folder; default ``./vobscure-out/compare-<scene>``.
     cache : bool, path or ReferenceCache
         True: the default user cache folder; a path: that folder; False: no cache.
     progress : bool
     plots : bool
-        Write the PNGs (the CSV, Markdown and provenance are always written when ``out`` is set).
+        Write the PNGs.
+    write : bool
+        False: write nothing at all (figure modules use the rows directly).
 
     Returns
     -------
@@ -336,7 +337,7 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
         cache=None if not store.enabled else str(store.directory),
         cache_hits={f"{r:g}": h for r, h in hits.items()}, seconds=time.perf_counter() - t_start,
         machine=_machine(), date=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
-    files = _write(out, rows, provenance, all_refs, images, gb, primary, plots)
+    files = _write(out, rows, provenance, all_refs, images, gb, primary, plots) if write else {}
     return CompareResult(rows=rows, files=files, provenance=provenance, references=all_refs, images=images)
 
 

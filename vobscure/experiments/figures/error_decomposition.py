@@ -1,0 +1,114 @@
+"""Why an estimator is off: its error split into sampling, screen-space and model error.
+
+One PNG, ``error_decomposition.png``, from :func:`vobscure.experiments.compare.compare` on the
+Cornell box and the blob, for lines 5 and 9, points 12 and 33 and one area sample, with the
+normal (``normal_clamp=True``: half-ball VO, which reads 1 on an open flat surface as AO does;
+unclamped ball VO reads 0.5 there and its model term would be mostly that constant):
+
+(a) the mean signed error (bias) of each step, stacked: sampling (estimate minus the converged
+    screen-space VO, :func:`vobscure.vo_reference`), screen space (that minus the world-space VO
+    of the Embree ground truth) and model (world-space VO minus ray-cast AO within the
+    radius). Biases add up exactly to the total bias against AO (the black tick);
+(b) the RMSE of each step beside the total RMSE against AO (RMSEs do not add: the steps'
+    errors partly cancel).
+
+Regenerate with::
+
+    vobscure figures error_decomposition --out docs/img
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["make", "FILENAME"]
+
+#: Name of the one file :func:`make` writes.
+FILENAME = "error_decomposition.png"
+METHODS = "line:5,line:9,point:12,point:33,area:1"
+SCENES = ("cornell_box", "blob")
+TERMS = (("sampling", "#1f77b4"), ("screen", "#ff7f0e"), ("model", "#2ca02c"))
+
+
+def measure(quick: bool = False, *, seed: int = 0, cache=False):
+    """Rows of :func:`vobscure.experiments.compare.compare` for :data:`SCENES` (list of dicts,
+    each with a ``scene`` key)."""
+    from ..compare import compare
+
+    size = (40, 40) if quick else (160, 160)
+    rows = []
+    for scene in SCENES:
+        res = compare(scene, size=size, methods=METHODS, references=("screen", "volumetric", "ao"),
+                      normal_clamp=True,
+                      repeats=1, rays=32 if quick else 256, samples=64 if quick else 512,
+                      screen_samples=128 if quick else 2048, seed=seed, cache=cache, progress=False,
+                      out=None, plots=False, write=False)
+        rows += [dict(row, scene=scene) for row in res.rows]
+    return rows
+
+
+def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False) -> list[Path]:
+    """Draw ``error_decomposition.png``.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+    quick : bool
+        40 x 40 images and few reference samples (seconds), for CI; 160 x 160 otherwise.
+    seed : int
+    cache : bool or path
+        Reference cache, as in :func:`vobscure.experiments.compare.compare`.
+
+    Returns
+    -------
+    list of Path
+
+    Examples
+    --------
+    >>> FILENAME
+    'error_decomposition.png'
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from ..._io import atomic_write
+
+    rows = measure(quick, seed=seed, cache=cache)
+    fig = Figure(figsize=(12, 4.2 * len(SCENES)), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(SCENES), 2, squeeze=False)
+    for i, scene in enumerate(SCENES):
+        sel = [r for r in rows if r["scene"] == scene]
+        labels = [f"{r['method']} {r['samples']}" for r in sel]
+        x = np.arange(len(sel))
+        ax = axes[i, 0]
+        pos, neg = np.zeros(len(sel)), np.zeros(len(sel))
+        for term, color in TERMS:
+            v = np.array([r[f"{term}_error_bias"] for r in sel])
+            base = np.where(v >= 0, pos, neg)
+            ax.bar(x, v, bottom=base, color=color, label=term, width=0.6)
+            pos += np.maximum(v, 0)
+            neg += np.minimum(v, 0)
+        total = np.array([r["total_error_bias"] for r in sel])
+        ax.scatter(x, total, marker="_", s=600, color="k", zorder=3, label="total (vs AO)")
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xticks(x, labels)
+        ax.set_ylabel("mean signed error")
+        ax.set_title(f"{scene}: bias by step (adds up to the total)")
+        ax.legend(fontsize=8)
+        ax = axes[i, 1]
+        w = 0.2
+        for k, (term, color) in enumerate(TERMS):
+            ax.bar(x + (k - 1.5) * w, [r[f"{term}_error_rmse"] for r in sel], w, color=color, label=term)
+        ax.bar(x + 1.5 * w, [r["total_error_rmse"] for r in sel], w, color="0.3", label="total (vs AO)")
+        ax.set_xticks(x, labels)
+        ax.set_ylabel("RMSE")
+        ax.set_title(f"{scene}: RMSE by step")
+        ax.legend(fontsize=8)
+    fig.suptitle("Half-ball VO, error decomposition: sampling (estimate - screen-space VO), screen space "
+                 "(screen-space - world-space VO), model (world-space VO - AO)")
+    path = Path(out_dir) / FILENAME
+    atomic_write(path, lambda fh: fig.savefig(fh, format="png"))
+    return [path]
