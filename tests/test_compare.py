@@ -40,7 +40,8 @@ def test_files_columns_and_ranges(first_run):
     assert [(r["method"], r["samples"]) for r in rows] == [("line", "5"), ("point", "12"), ("area", "1")]
     for r in rows:
         assert float(r["seconds"]) > 0
-        assert int(r["taps_per_pixel"]) == C.TEXELS_PER_SAMPLE[r["method"]] * int(r["samples"])
+        assert int(r["taps_per_pixel"]) == int(r["samples"])
+        assert int(r["texels_per_pixel"]) == C.TEXELS_PER_SAMPLE[r["method"]] * int(r["samples"])
         for ref in ("screen", "volumetric", "ao"):
             assert 0 <= float(r[f"{ref}_rmse"]) <= 1 and 0 <= float(r[f"{ref}_mae"]) <= float(r[f"{ref}_rmse"])
             assert -1 <= float(r[f"{ref}_bias"]) <= 1 and -1 <= float(r[f"{ref}_ssim"]) <= 1

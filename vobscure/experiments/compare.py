@@ -8,7 +8,7 @@ steps that cause it (:func:`vobscure.metrics.decompose`): sampling (estimate vs 
 screen-space VO), screen space (that vs the world-space VO) and model (world-space VO vs AO).
 
 Outputs (all written atomically into ``out``): ``results.csv``, ``results.md``,
-``tradeoff.png`` (error against time and against depth taps per pixel, one curve per method,
+``tradeoff.png`` (error against time and against depth texels read per pixel, one curve per method,
 the Pareto front marked), ``gallery.png`` (each estimate beside the references and its error
 map) and ``provenance.json``. With ``orbit`` > 1, a camera orbit of that many frames also
 measures temporal stability (:func:`vobscure.metrics.flicker`).
@@ -39,9 +39,10 @@ DEFAULT_METHODS = "point:12,point:33,line:5,line:9,area:1"
 #: AO within the radius, and obscurance with a linear falloff.
 REFERENCES = ("screen", "volumetric", "ao", "obscurance")
 DEFAULT_REFERENCES = ("screen", "volumetric", "ao")
-#: Depth-buffer texels one sample reads: 1 for points and lines; for vo_area's default
-#: B-spline lookup, 2 levels x 3 x 3 texels (benchmarks/bench_screenspace.py).
-TEXELS_PER_SAMPLE = {"point": 1, "line": 1, "area": 18}
+#: Depth-buffer texels one tap (sample) reads with each method's default fetch: points
+#: bilinear (4), lines nearest (1), vo_area's B-spline mip lookup 2 levels x 3 x 3 (18, of 3
+#: channels); as in :mod:`vobscure.experiments.sweep` and ``benchmarks/bench_screenspace.py``.
+TEXELS_PER_SAMPLE = {"point": 4, "line": 1, "area": 18}
 #: Default radius as a fraction of the scene's extent (as ``vobscure render``).
 RADIUS_FRACTION = 0.1
 #: Sizes of the default and the quick run.
@@ -68,7 +69,12 @@ class Method:
 
     @property
     def taps(self) -> int:
-        """Depth-buffer texels read per pixel."""
+        """Depth-buffer taps (fetches) per pixel: one per sample."""
+        return self.samples
+
+    @property
+    def texels(self) -> int:
+        """Depth-buffer texels read per pixel: taps x texels per tap."""
         return TEXELS_PER_SAMPLE[self.name] * self.samples
 
     def run(self, gbuffer, *, radius, normal_clamp, thickness, seed):
@@ -255,8 +261,9 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     >>> res = vo.experiments.compare.compare("slab", size=(16, 16), methods="line:5", quick=True,
     ...                                      references=("screen",), cache=False, progress=False,
     ...                                      out=tempfile.mkdtemp(), plots=False)
-    >>> res.rows[0]["method"], res.rows[0]["samples"], res.rows[0]["taps_per_pixel"]
-    ('line', 5, 5)
+    >>> r = res.rows[0]
+    >>> r["method"], r["samples"], r["taps_per_pixel"], r["texels_per_pixel"]
+    ('line', 5, 5, 5)
     """
     from .. import render_gbuffer
     from ..metrics import decompose, error, flicker
@@ -308,7 +315,8 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
             seconds, est = _time(lambda: m.run(gb, radius=radius, normal_clamp=normal_clamp,
                                                thickness=thickness, seed=seed), repeats)
             row = dict(method=m.name, samples=m.samples, radius=float(radius), normal_clamp=bool(normal_clamp),
-                       thickness=thickness, seconds=seconds, taps_per_pixel=m.taps)
+                       thickness=thickness, seconds=seconds, taps_per_pixel=m.taps,
+                       texels_per_pixel=m.texels)
             for name, ref in refs.items():
                 rep = error(est, ref)
                 for metric in METRICS:
@@ -499,7 +507,7 @@ def _tradeoff(path, rows, provenance):
     radii = sorted({row["radius"] for row in rows})
     for i, ref in enumerate(refs):
         for j, (cost, label) in enumerate((("seconds", "median seconds per frame"),
-                                           ("taps_per_pixel", "depth taps per pixel"))):
+                                           ("texels_per_pixel", "depth texels read per pixel"))):
             ax = axes[i, j]
             x = np.array([row[cost] for row in rows], float)
             y = np.array([row[f"{ref}_rmse"] for row in rows], float)
