@@ -77,3 +77,23 @@ def test_open_mesh_volumetric_needs_the_flag(tmp_path, capsys):
     assert cli.main(args + ["--allow-open"]) == 0
     with np.load(tmp_path / "out" / "open_volumetric.npz") as data:
         assert json.loads(str(data["provenance"]))["allow_open"] is True
+
+
+def test_figures_command_lists_and_rejects_unknown_names(capsys, tmp_path):
+    from vobscure.cli import main
+    from vobscure.experiments import figures
+
+    assert main(["figures", "--list"]) == 0
+    listed = capsys.readouterr().out.split()
+    assert "conventions" in listed and set(listed) == set(getattr(figures, "FIGURES", figures.__all__))
+    assert main(["figures", "no_such_figure", "--out", str(tmp_path)]) == 2
+    assert "no_such_figure" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_figures_command_runs_one_figure_quick(capsys, tmp_path):
+    from vobscure.cli import main
+
+    assert main(["figures", "conventions", "--quick", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "conventions.png").is_file()
+    assert "conventions.png" in capsys.readouterr().out
