@@ -61,3 +61,146 @@ def test_bad_inputs():
         vo.error(np.zeros((3, 3)), np.zeros((3, 3)), mask=np.ones((3, 3)))
     with pytest.raises(ValueError, match="estimate"):
         vo.error("abc", np.zeros(3))
+
+
+# ----------------------------------------------------------------------------- decompose
+#: |total - (estimate - ao)|: the telescoped sum against the direct difference, float64 rounding.
+TELESCOPE_ATOL = 1e-15
+
+
+def _decomposition_inputs(shape=(12, 16), seed=0, dtype=np.float64):
+    rng = np.random.default_rng(seed)
+    E, S, W, A, O = (rng.random(shape).astype(dtype) for _ in range(5))
+    E[0, :3] = np.nan          # background of the estimate
+    S[1, 0] = np.nan
+    W[2, :2] = np.inf          # non-finite counts as undefined too
+    A[3, 4] = np.nan
+    return E, S, W, A, O
+
+
+def test_decompose_identity_is_exact_per_pixel():
+    E, S, W, A, O = _decomposition_inputs()
+    d = vo.metrics.decompose(E, S, W, ao=A, obscurance=O)
+    use = np.isfinite(E) & np.isfinite(S) & np.isfinite(W) & np.isfinite(A) & np.isfinite(O)
+    assert d.pixels == use.sum() == 12 * 16 - 7 and d.ignored == 7
+    assert d.undefined == {"estimate": 3, "screen_reference": 1, "world_vo": 2, "ao": 1, "obscurance": 0}
+    np.testing.assert_array_equal(d.sampling + d.screen + d.model, d.total)    # bit for bit
+    np.testing.assert_array_equal(d.sampling[use], E[use] - S[use])
+    np.testing.assert_array_equal(d.screen[use], S[use] - W[use])
+    np.testing.assert_array_equal(d.model[use], W[use] - A[use])
+    np.testing.assert_array_equal(d.model_obscurance[use], W[use] - O[use])
+    np.testing.assert_allclose(d.total[use], E[use] - A[use], rtol=0, atol=TELESCOPE_ATOL)
+    for m in (d.sampling, d.screen, d.model, d.total, d.model_obscurance):
+        assert np.array_equal(np.isnan(m), ~use) and m.dtype == np.float64
+    assert d.target == "ao"
+    # summaries over the same pixels, by hand
+    for term, diff in (("sampling", E - S), ("screen", S - W), ("model", W - A), ("total", E - A)):
+        x = diff[use]
+        s = d.summary[term]
+        assert s.rmse == pytest.approx(np.sqrt(np.mean(x ** 2)), rel=1e-12)
+        assert s.bias == pytest.approx(np.mean(x), rel=1e-12)
+        assert s.mae == pytest.approx(np.mean(np.abs(x)), rel=1e-12)
+    b = d.summary
+    assert b["sampling"].bias + b["screen"].bias + b["model"].bias == pytest.approx(b["total"].bias, abs=1e-14)
+    row = d.as_dict()
+    assert row["total_rmse"] == b["total"].rmse and row["pixels"] == d.pixels and row["target"] == "ao"
+    assert "model_obscurance_bias" in row
+
+
+def test_decompose_without_ao_and_with_mask():
+    E, S, W, _, _ = _decomposition_inputs(dtype=np.float32)
+    mask = np.zeros(E.shape, bool)
+    mask[4:, :] = True
+    d = vo.metrics.decompose(E, S, W, mask=mask)
+    assert d.model is None and d.model_obscurance is None and d.target == "volumetric"
+    assert set(d.summary) == {"sampling", "screen", "total"}
+    np.testing.assert_array_equal(d.sampling + d.screen, d.total)
+    assert d.pixels == 8 * 16 and d.ignored == 4 * 16    # every undefined pixel lies in rows 0-3
+    use = mask
+    E64, S64, W64 = (a.astype(np.float64) for a in (E, S, W))
+    np.testing.assert_allclose(d.total[use], E64[use] - W64[use], rtol=0, atol=TELESCOPE_ATOL)
+    assert np.all(np.isnan(d.total[~mask]))
+
+
+def test_decompose_accepts_estimates_and_handles_all_background():
+    E, S, W, A, _ = _decomposition_inputs(shape=(4, 5))
+    est = vo.Estimate(W, np.zeros_like(W), 64)
+    d = vo.metrics.decompose(E, S, est, ao=vo.Estimate(A, np.zeros_like(A), 64))
+    np.testing.assert_array_equal(d.screen, vo.metrics.decompose(E, S, W, ao=A).screen)
+    empty = vo.metrics.decompose(np.full((3, 3), np.nan), np.zeros((3, 3)), np.zeros((3, 3)))
+    assert empty.pixels == 0 and empty.ignored == 9 and np.isnan(empty.summary["total"].rmse)
+
+
+def test_decompose_bad_inputs_name_the_argument():
+    a = np.zeros((3, 4))
+    with pytest.raises(ValueError, match="screen_reference"):
+        vo.metrics.decompose(a, np.zeros((4, 3)), a)
+    with pytest.raises(ValueError, match="world_vo"):
+        vo.metrics.decompose(a, a, np.zeros(12))
+    with pytest.raises(ValueError, match="^ao"):
+        vo.metrics.decompose(a, a, a, ao=np.zeros((3, 5)))
+    with pytest.raises(ValueError, match="obscurance"):
+        vo.metrics.decompose(a, a, a, obscurance="x")
+    with pytest.raises(ValueError, match="mask"):
+        vo.metrics.decompose(a, a, a, mask=np.ones((3, 4)))
+    with pytest.raises(ValueError, match="mask"):
+        vo.metrics.decompose(a, a, a, mask=np.ones((4, 3), bool))
+
+
+# ----------------------------------------------------------------------------- flicker
+def test_flicker_known_sequences():
+    rng = np.random.default_rng(3)
+    base = rng.random((6, 5))
+    constant = np.repeat(base[None], 7, axis=0)
+    f = vo.metrics.flicker(constant)
+    assert f.value == 0 and f.estimate_change == 0 and np.isnan(f.reference_change)
+    assert f.pairs == 6 * 30 and f.ignored == 0
+    d = 0.05
+    steps = base[None] + d * (np.arange(7) % 2)[:, None, None]      # x, x + d, x, x + d, ...
+    assert vo.metrics.flicker(steps).value == pytest.approx(d, rel=1e-12)
+    signs = base[None] + d * np.array([1, -1] * 3 + [1])[:, None, None]   # x + d, x - d, ...
+    assert vo.metrics.flicker(signs).value == pytest.approx(2 * d, rel=1e-12)
+    # a reference that moves by r every frame: what remains is the estimator's own flicker
+    r = 0.01
+    ref = base[None] + r * np.arange(7)[:, None, None]
+    est = ref + d * (np.arange(7) % 2)[:, None, None]           # |r +- d| alternately: mean d
+    f = vo.metrics.flicker(est, ref)
+    assert f.reference_change == pytest.approx(r, rel=1e-9)
+    assert f.estimate_change == pytest.approx(d, rel=1e-9)     # (d + r + d - r) / 2
+    assert f.value == pytest.approx(d - r, rel=1e-9)
+    assert vo.metrics.flicker(ref, ref).value == 0
+
+
+def test_flicker_nan_and_masks():
+    frames = np.full((3, 2, 2), 0.5)
+    frames[1] += 0.1
+    frames[1, 0, 0] = np.nan                       # pixel (0, 0) undefined in frame 1: both pairs
+    frames[2, 1, 1] = np.inf                       # (1, 1) undefined in frame 2: the second pair
+    f = vo.metrics.flicker(frames)
+    assert f.pairs == 2 * 4 - 3 and f.ignored == 3
+    assert f.value == pytest.approx(0.1, rel=1e-12)
+    mask = np.array([[True, False], [True, True]])
+    g = vo.metrics.flicker(frames, mask=mask)
+    assert g.pairs == 5 - 2 and g.ignored == 5      # (0, 1) masked out of both pairs
+    per_frame = np.ones((3, 2, 2), bool)
+    per_frame[2] = False                            # frame 2 unused: only the first pair counts
+    h = vo.metrics.flicker(frames, mask=per_frame)
+    assert h.pairs == 3 and h.value == pytest.approx(0.1, rel=1e-12)
+    none = vo.metrics.flicker(np.full((2, 3), np.nan))
+    assert none.pairs == 0 and none.ignored == 3 and np.isnan(none.value)
+    ref = np.full((3, 2, 2), 0.5)
+    ref[0, 1, 0] = np.nan                           # the reference's undefined pixels count too
+    assert vo.metrics.flicker(frames, ref).pairs == f.pairs - 1
+
+
+def test_flicker_bad_inputs_name_the_argument():
+    with pytest.raises(ValueError, match="frames"):
+        vo.metrics.flicker(np.zeros((1, 4, 4)))
+    with pytest.raises(ValueError, match="frames"):
+        vo.metrics.flicker(np.zeros(5))
+    with pytest.raises(ValueError, match="reference_frames"):
+        vo.metrics.flicker(np.zeros((3, 4, 4)), np.zeros((3, 4, 5)))
+    with pytest.raises(ValueError, match="mask"):
+        vo.metrics.flicker(np.zeros((3, 4, 4)), mask=np.ones((4, 5), bool))
+    with pytest.raises(ValueError, match="mask"):
+        vo.metrics.flicker(np.zeros((3, 4, 4)), mask=np.ones((4, 4)))

@@ -1,7 +1,13 @@
-"""Masked error metrics between a visibility image and its reference.
+"""Masked error metrics: error against a reference, its decomposition, temporal flicker.
 
-NaN policy: a pixel that is NaN in either image (background, by the library's convention)
-is ignored, and the result says how many pixels were ignored.
+- :func:`error`: one estimate against one reference (RMSE, MAE, bias, PSNR, SSIM).
+- :func:`decompose`: the error of a screen-space estimate against the ray-cast truth split
+  into sampling, screen-space and model error, which add up to the total per pixel.
+- :func:`flicker`: the mean absolute frame-to-frame change of an animated estimate, less
+  that of its reference.
+
+NaN policy: a pixel that is NaN (or inf) in any input (background, by the library's
+convention) is ignored, and the result says how many pixels were ignored.
 """
 
 from __future__ import annotations
@@ -12,7 +18,8 @@ import numpy as np
 
 from ._validate import as_array
 
-__all__ = ["ErrorReport", "error"]
+__all__ = ["ErrorReport", "error", "TermSummary", "Decomposition", "decompose",
+           "Flicker", "flicker"]
 
 #: SSIM's default Gaussian-free window (scikit-image): 7 x 7, shrunk to fit small images.
 SSIM_WINDOW = 7
@@ -120,3 +127,295 @@ def _masked_ssim(est, ref, use) -> float:
     inner[pad:use.shape[0] - pad, pad:use.shape[1] - pad] = True
     inner &= use
     return float(np.mean(smap[inner])) if inner.any() else float("nan")
+
+
+# ----------------------------------------------------------------------------- decomposition
+@dataclass(frozen=True)
+class TermSummary:
+    """Summary of one error map over the pixels it was measured on.
+
+    Attributes
+    ----------
+    rmse : float
+        Root-mean-square of the map.
+    bias : float
+        Its mean (signed).
+    mae : float
+        Its mean absolute value.
+    """
+
+    rmse: float
+    bias: float
+    mae: float
+
+    @classmethod
+    def of(cls, diff: np.ndarray) -> "TermSummary":
+        """The summary of the 1-D float64 array ``diff`` (NaN for an empty one)."""
+        if diff.size == 0:
+            nan = float("nan")
+            return cls(nan, nan, nan)
+        return cls(rmse=float(np.sqrt(np.mean(diff * diff))), bias=float(np.mean(diff)),
+                   mae=float(np.mean(np.abs(diff))))
+
+
+#: Terms of a :class:`Decomposition`, in the order of the telescoping sum (then the extras).
+DECOMPOSITION_TERMS = ("sampling", "screen", "model", "total", "model_obscurance")
+
+
+@dataclass(frozen=True, eq=False)
+class Decomposition:
+    """The error of an estimate split into the steps that cause it (see :func:`decompose`).
+
+    Every map is (H, W) float64, NaN on the ignored pixels (the same pixels for all maps).
+
+    Attributes
+    ----------
+    sampling : ndarray
+        estimate - screen_reference: what the estimator's finite sampling adds to the
+        converged screen-space VO.
+    screen : ndarray
+        screen_reference - world_vo: what the screen-space model itself gets wrong (nothing
+        is known behind the depth buffer, nothing outside the image).
+    model : ndarray or None
+        world_vo - ao: how far Volumetric Obscurance, even exact, is from ambient
+        occlusion. None when no ``ao`` was given.
+    total : ndarray
+        sampling + screen + model (+ model only when ``ao`` was given): the estimate's error
+        against ``target``. The sum holds exactly, bit for bit, per pixel; it equals
+        ``estimate - ao`` (or ``estimate - world_vo``) up to float64 rounding.
+    model_obscurance : ndarray or None
+        world_vo - obscurance, when ``obscurance`` was given (outside the sum).
+    target : {"ao", "volumetric"}
+        What ``total`` is measured against.
+    summary : dict of str to TermSummary
+        rmse, bias and mae of every map present, keyed by the attribute names above.
+    pixels : int
+        Pixels used: finite in every input and inside the mask.
+    ignored : int
+        The other pixels.
+    undefined : dict of str to int
+        NaN or inf pixels per input (an ignored pixel may be counted under several inputs;
+        the remaining ignored pixels were excluded by the mask).
+    """
+
+    sampling: np.ndarray
+    screen: np.ndarray
+    model: np.ndarray | None
+    total: np.ndarray
+    model_obscurance: np.ndarray | None
+    target: str
+    summary: dict
+    pixels: int
+    ignored: int
+    undefined: dict
+
+    def as_dict(self) -> dict:
+        """Flat summary: ``<term>_rmse``, ``<term>_bias``, ``<term>_mae`` for every term
+        present, then ``target``, ``pixels`` and ``ignored`` (for tables and CSV files)."""
+        out = {}
+        for term in DECOMPOSITION_TERMS:
+            if term in self.summary:
+                for stat, v in asdict(self.summary[term]).items():
+                    out[f"{term}_{stat}"] = v
+        out.update(target=self.target, pixels=self.pixels, ignored=self.ignored)
+        return out
+
+
+def _image(value, name: str, shape=None) -> np.ndarray:
+    """A float64 array (an Estimate's value is accepted), NaN allowed, of ``shape`` if given."""
+    from .estimate import Estimate
+
+    if isinstance(value, Estimate):
+        value = value.value
+    arr = as_array(value, name, finite=False)
+    if shape is not None and arr.shape != shape:
+        raise ValueError(f"{name} must have the shape of estimate {shape}, got {arr.shape}")
+    return arr
+
+
+def _bool_mask(mask, shapes: tuple, what: str) -> np.ndarray:
+    m = np.asarray(mask)
+    if m.shape not in shapes:
+        want = " or ".join(str(s) for s in shapes)
+        raise ValueError(f"mask must have the shape of {what} {want}, got {m.shape}")
+    if m.dtype != bool:
+        raise ValueError(f"mask must be a boolean array, got dtype {m.dtype}")
+    return m
+
+
+def decompose(estimate, screen_reference, world_vo, *, ao=None, obscurance=None,
+              mask=None) -> Decomposition:
+    """Split an estimate's error into sampling, screen-space and model error.
+
+    The error of a screen-space estimate E against ray-cast ambient occlusion A telescopes
+    through the converged screen-space VO S and the world-space VO W::
+
+        E - A = (E - S) + (S - W) + (W - A)
+              = sampling + screen-space + model error
+
+    which tells *why* an estimate is off: too few samples, the depth buffer's missing
+    information, or the choice of VO as a stand-in for AO.
+
+    Parameters
+    ----------
+    estimate : (H, W) array_like
+        The estimator's visibility (e.g. :func:`vobscure.vo_line`), NaN on background.
+    screen_reference : (H, W) array_like
+        The converged screen-space VO with the estimator's settings
+        (:func:`vobscure.vo_reference`).
+    world_vo : (H, W) array_like or Estimate
+        The world-space VO (``vobscure.ground_truth(..., quantity="volumetric")``).
+    ao : (H, W) array_like or Estimate, optional
+        Ray-cast AO (``quantity="ao"``); when given, ``total`` is measured against it and the
+        model term is W - A. Otherwise ``total`` is measured against ``world_vo``.
+    obscurance : (H, W) array_like or Estimate, optional
+        Ray-cast obscurance; adds the map ``model_obscurance`` = W - obscurance (reported
+        beside the sum, not in it).
+    mask : (H, W) bool array_like, optional
+        Only pixels where ``mask`` is True are used.
+
+    Returns
+    -------
+    Decomposition
+
+    Notes
+    -----
+    A pixel is used when it is finite in every given input and inside the mask; all maps are
+    NaN elsewhere, so every summary is taken over the same pixels and the summed biases
+    also add up (to rounding). The terms are the plain float64 differences of the inputs;
+    ``total`` is their sum, so that the identity sampling + screen + model == total holds
+    exactly per pixel (it differs from ``estimate - ao`` by float64 rounding only).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> E = np.array([[0.6, np.nan]]); S = np.array([[0.5, 0.5]])
+    >>> W = np.array([[0.45, 0.5]]); A = np.array([[0.7, 0.7]])
+    >>> d = decompose(E, S, W, ao=A)
+    >>> [round(float(t[0, 0]), 6) for t in (d.sampling, d.screen, d.model, d.total)]
+    [0.1, 0.05, -0.25, -0.1]
+    >>> d.pixels, d.ignored, d.undefined["estimate"], bool(np.isnan(d.total[0, 1]))
+    (1, 1, 1, True)
+    """
+    E = _image(estimate, "estimate")
+    shape = E.shape
+    inputs = {"estimate": E,
+              "screen_reference": _image(screen_reference, "screen_reference", shape),
+              "world_vo": _image(world_vo, "world_vo", shape)}
+    if ao is not None:
+        inputs["ao"] = _image(ao, "ao", shape)
+    if obscurance is not None:
+        inputs["obscurance"] = _image(obscurance, "obscurance", shape)
+    undefined = {name: int(np.count_nonzero(~np.isfinite(a))) for name, a in inputs.items()}
+    use = np.logical_and.reduce([np.isfinite(a) for a in inputs.values()])
+    if mask is not None:
+        use &= _bool_mask(mask, (shape,), "the images")
+    S, W = inputs["screen_reference"], inputs["world_vo"]
+
+    def diff(a, b):
+        out = np.full(shape, np.nan)
+        np.subtract(a, b, out=out, where=use)
+        return out
+
+    maps = {"sampling": diff(E, S), "screen": diff(S, W)}
+    total = maps["sampling"] + maps["screen"]
+    if ao is not None:
+        maps["model"] = diff(W, inputs["ao"])
+        total = total + maps["model"]
+    maps["total"] = total
+    if obscurance is not None:
+        maps["model_obscurance"] = diff(W, inputs["obscurance"])
+    summary = {term: TermSummary.of(m[use]) for term, m in maps.items()}
+    pixels = int(np.count_nonzero(use))
+    return Decomposition(sampling=maps["sampling"], screen=maps["screen"], model=maps.get("model"),
+                         total=total, model_obscurance=maps.get("model_obscurance"),
+                         target="ao" if ao is not None else "volumetric", summary=summary,
+                         pixels=pixels, ignored=int(use.size - pixels), undefined=undefined)
+
+
+# ----------------------------------------------------------------------------- flicker
+@dataclass(frozen=True)
+class Flicker:
+    """Temporal instability of an animated estimate (see :func:`flicker`).
+
+    Attributes
+    ----------
+    value : float
+        ``estimate_change - reference_change`` (``estimate_change`` when no reference was
+        given): the frame-to-frame change the estimator adds.
+    estimate_change : float
+        Mean absolute frame-to-frame change of the estimate.
+    reference_change : float
+        The same for the reference frames over the same pixels; NaN without reference.
+    pairs : int
+        (frame pair, pixel) entries averaged over.
+    ignored : int
+        Entries skipped: undefined in either frame of the pair (or either reference frame)
+        or outside the mask.
+    """
+
+    value: float
+    estimate_change: float
+    reference_change: float
+    pairs: int
+    ignored: int
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def flicker(frames, reference_frames=None, *, mask=None) -> Flicker:
+    """Mean absolute frame-to-frame change of an estimate, less that of its reference.
+
+    For frames V_0 ... V_{T-1} (e.g. a camera orbit) the change is the mean of
+    ``|V_{t+1}(p) - V_t(p)|`` over every consecutive pair t and every pixel p defined in both
+    frames. Part of that change is real (the camera moves, so a pixel sees another surface
+    point): the same mean over ``reference_frames`` (a converged reference of the same
+    frames), taken over the same pixels, is subtracted, so that what remains is the flicker
+    the estimator adds (noise that is not stable under motion, aliasing of its samples).
+
+    Parameters
+    ----------
+    frames : (T, H, W) array_like
+        T >= 2 frames of visibility (any trailing shape), NaN where undefined.
+    reference_frames : (T, H, W) array_like, optional
+        The reference for the same frames.
+    mask : (H, W) or (T, H, W) bool array_like, optional
+        Pixels to use, for all frames or per frame (a pair uses a pixel when both of its
+        frames do).
+
+    Returns
+    -------
+    Flicker
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> base = np.full((4, 2, 2), 0.5)
+    >>> noisy = base + 0.1 * np.array([1, -1, 1, -1])[:, None, None]
+    >>> f = flicker(noisy, base)
+    >>> round(f.value, 12), round(f.estimate_change, 12), f.reference_change, f.pairs
+    (0.2, 0.2, 0.0, 12)
+    """
+    V = _image(frames, "frames")
+    if V.ndim < 2 or V.shape[0] < 2:
+        raise ValueError(f"frames must be a sequence of at least 2 frames (T, H, W), got shape {V.shape}")
+    use = np.isfinite(V[1:]) & np.isfinite(V[:-1])
+    R = None
+    if reference_frames is not None:
+        R = _image(reference_frames, "reference_frames")
+        if R.shape != V.shape:
+            raise ValueError(f"reference_frames must have the shape of frames {V.shape}, got {R.shape}")
+        use &= np.isfinite(R[1:]) & np.isfinite(R[:-1])
+    if mask is not None:
+        m = _bool_mask(mask, (V.shape[1:], V.shape), "a frame or of frames")
+        use &= (m[1:] & m[:-1]) if m.shape == V.shape else m
+    n = int(np.count_nonzero(use))
+    ignored = int(use.size - n)
+    nan = float("nan")
+    if n == 0:
+        return Flicker(nan, nan, nan, 0, ignored)
+    est = float(np.mean(np.abs(V[1:][use] - V[:-1][use])))
+    ref = float(np.mean(np.abs(R[1:][use] - R[:-1][use]))) if R is not None else nan
+    return Flicker(value=est - ref if R is not None else est, estimate_change=est,
+                   reference_change=ref, pairs=n, ignored=ignored)

@@ -1,0 +1,652 @@
+"""A disk cache of expensive references (ray-cast ground truths, converged screen-space VO).
+
+A reference is stored under a key that is the SHA-256 of a canonical JSON record of
+everything its numbers depend on: a hash of the scene's geometry or of the G-buffer, the
+camera, the quantity and its parameters, the seed, :data:`REFERENCE_CODE_VERSION` and the
+library's version. Each entry is one ``.npz`` file, written atomically (:mod:`vobscure._io`),
+that holds the arrays and a provenance record: the key and its fields, the versions, the
+date, the seconds the computation took, the shape and dtype of every array and a SHA-256
+checksum of their bytes.
+
+An entry is never trusted: on every load the file must parse, its stored key must equal
+the requested one and its arrays must have the recorded (and, when the caller says, the
+expected) shapes and dtypes and the recorded checksum. On any mismatch a
+:class:`CacheWarning` says what was wrong with which file, and the reference is recomputed
+and the entry overwritten.
+
+Where the cache lives: the ``directory`` given, else the environment variable
+``VOBSCURE_CACHE``, else ``$XDG_CACHE_HOME/vobscure``, else ``~/.cache/vobscure``. It is
+created on the first write.
+
+Examples
+--------
+>>> import tempfile, numpy as np, vobscure as vo
+>>> from vobscure.experiments.cache import ReferenceCache, ground_truth_cached
+>>> tmp = tempfile.TemporaryDirectory()
+>>> cache = ReferenceCache(tmp.name)
+>>> scene = vo.scenes.slab()
+>>> gb = vo.render_gbuffer(scene, vo.Camera.look_at((0, 3, 0), (0, 0, 0), up=(0, 0, -1),
+...                                                  size=(4, 4), ortho_height=2.0))
+>>> a, hit = ground_truth_cached(scene, gb, cache=cache, quantity="ao", radius=1.0, rays=16,
+...                              seed=0, progress=False)
+>>> b, hit_again = ground_truth_cached(scene, gb, cache=cache, quantity="ao", radius=1.0, rays=16,
+...                                    seed=0, progress=False)
+>>> hit, hit_again, bool(np.array_equal(a.value, b.value))
+(False, True, True)
+>>> tmp.cleanup()
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+import math
+import os
+import tempfile
+import time
+import warnings
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import numpy as np
+
+from .._io import save_npz
+from .._validate import check_choice, check_int, check_positive
+from ..estimate import Estimate
+
+__all__ = ["ReferenceCache", "CacheWarning", "CacheError", "REFERENCE_CODE_VERSION", "CACHE_FORMAT",
+           "CACHE_ENV", "default_directory", "cache_key", "canonical_json", "scene_digest",
+           "gbuffer_digest", "array_digest", "ground_truth_cached", "screen_reference_cached"]
+
+#: Version of the code that computes references (ground truth, G-buffer rendering,
+#: ``vo_reference``). Bump it whenever a change alters their numbers: every cached entry made
+#: before then stops matching and is recomputed.
+REFERENCE_CODE_VERSION = "1"
+#: Layout of an entry file (the provenance fields and array records read back by :meth:`load`).
+CACHE_FORMAT = 1
+#: Environment variable naming the default cache folder.
+CACHE_ENV = "VOBSCURE_CACHE"
+
+# Array name that save_npz uses for the provenance record; results may not use it.
+_PROVENANCE = "provenance"
+_ESTIMATE_ARRAYS = ("value", "stderr", "bent_normal")
+
+
+class CacheWarning(UserWarning):
+    """A cache entry was unreadable, foreign, stale or tampered with; it is being recomputed."""
+
+
+class CacheError(OSError):
+    """The cache folder cannot be created or written."""
+
+
+# ----------------------------------------------------------------------------- keys
+def default_directory() -> Path:
+    """The default cache folder: ``$VOBSCURE_CACHE``, ``$XDG_CACHE_HOME/vobscure`` or
+    ``~/.cache/vobscure`` (the first that is set; a relative ``XDG_CACHE_HOME`` is ignored,
+    as the XDG specification asks).
+
+    Examples
+    --------
+    >>> default_directory().name in ("vobscure",) or "VOBSCURE_CACHE" in os.environ
+    True
+    """
+    env = os.environ.get(CACHE_ENV)
+    if env:
+        return Path(env).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    if xdg and os.path.isabs(xdg):
+        return Path(xdg) / "vobscure"
+    return Path.home() / ".cache" / "vobscure"
+
+
+def _plain(value):
+    """``json.dumps`` default: NumPy scalars, paths, tuples, Cameras; arrays are refused."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, Path):
+        return str(value)
+    if hasattr(value, "to_dict") and callable(value.to_dict):
+        return value.to_dict()
+    if isinstance(value, np.ndarray):
+        raise ValueError("key_fields must not hold arrays; hash them first (array_digest)")
+    raise ValueError(f"key_fields holds a value of type {type(value).__name__} that has no "
+                     f"canonical JSON form: {value!r}")
+
+
+def canonical_json(fields: Mapping) -> str:
+    """The one JSON text of ``fields``: sorted keys, no spaces, floats written exactly.
+
+    NumPy scalars become Python numbers, tuples lists, paths strings and objects with a
+    ``to_dict`` method (a :class:`~vobscure.Camera`) their dict. Note that ``1`` and ``1.0``
+    differ: normalize numbers before building a key (the helpers of this module do).
+
+    Examples
+    --------
+    >>> canonical_json({"b": (1, 2.5), "a": np.float64(0.1)})
+    '{"a":0.1,"b":[1,2.5]}'
+    """
+    if not isinstance(fields, Mapping):
+        raise ValueError(f"key_fields must be a mapping of str to JSON-able values, got {type(fields).__name__}")
+    try:
+        return json.dumps(fields, sort_keys=True, separators=(",", ":"), default=_plain)
+    except TypeError as exc:  # e.g. non-string keys that cannot be sorted
+        raise ValueError(f"key_fields cannot be written as canonical JSON: {exc}") from None
+
+
+def _library_version() -> str:
+    import vobscure
+
+    return str(getattr(vobscure, "__version__", "unknown"))
+
+
+def _versioned(fields: Mapping) -> dict:
+    """``fields`` plus the versions of the reference code and of the library."""
+    record = json.loads(canonical_json(fields))
+    for name in ("reference_code_version", "library_version"):
+        if name in record:
+            raise ValueError(f"key_fields must not set {name!r}; the cache adds it")
+    record["reference_code_version"] = REFERENCE_CODE_VERSION
+    record["library_version"] = _library_version()
+    return record
+
+
+def cache_key(fields: Mapping) -> str:
+    """SHA-256 (hex) of the canonical JSON of ``fields`` plus :data:`REFERENCE_CODE_VERSION`
+    and the library's version.
+
+    Examples
+    --------
+    >>> k = cache_key({"quantity": "ao", "radius": 0.5})
+    >>> len(k), k == cache_key({"radius": 0.5, "quantity": "ao"}), k == cache_key({"quantity": "ao", "radius": 0.25})
+    (64, True, False)
+    """
+    return hashlib.sha256(canonical_json(_versioned(fields)).encode()).hexdigest()
+
+
+def array_digest(*arrays) -> str:
+    """SHA-256 (hex) of arrays: dtype, shape and C-order bytes of each, in order."""
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def scene_digest(scene) -> str:
+    """SHA-256 (hex) of a scene's geometry: every mesh's name, vertices, faces and smoothing
+    angle (which decides its shading normals). The scene's name and suggested view are not
+    part of it.
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> scene_digest(vo.scenes.slab()) == scene_digest(vo.scenes.slab())
+    True
+    >>> scene_digest(vo.scenes.slab()) == scene_digest(vo.scenes.slab(thickness=2.0))
+    False
+    """
+    from ..groundtruth import _as_scene
+
+    scene = _as_scene(scene)
+    h = hashlib.sha256()
+    for name, mesh in scene.meshes.items():
+        h.update(json.dumps([name, scene.smooth_angle.get(name)]).encode())
+        h.update(array_digest(np.asarray(mesh.vertices, dtype=np.float64),
+                              np.asarray(mesh.faces, dtype=np.int64)).encode())
+    return h.hexdigest()
+
+
+def gbuffer_digest(gbuffer, *, world: bool = False) -> str:
+    """SHA-256 (hex) of what a reference reads from a G-buffer.
+
+    ``world=False``: the view-space ``depth`` and ``normal`` images and ``valid`` (the
+    inputs of the screen-space estimators, in their dtype). ``world=True``: ``valid`` and the
+    per-hit world positions, shading and geometric normals (the inputs of the ground truth).
+    """
+    if world:
+        hits = gbuffer.hits
+        return array_digest(gbuffer.valid, hits["index"], hits["world_position"], hits["world_normal"],
+                            hits["world_geometric_normal"])
+    return array_digest(gbuffer.depth, gbuffer.normal, gbuffer.valid)
+
+
+# ----------------------------------------------------------------------------- entries
+def _as_arrays(result, name: str = "compute()") -> tuple[str, dict, dict]:
+    """(kind, arrays, extra provenance) of an Estimate or a dict of arrays."""
+    if isinstance(result, Estimate):
+        arrays = {"value": np.asarray(result.value), "stderr": np.asarray(result.stderr)}
+        if result.bent_normal is not None:
+            arrays["bent_normal"] = np.asarray(result.bent_normal)
+        return "estimate", arrays, {"samples": int(result.samples)}
+    if isinstance(result, Mapping) and result:
+        arrays = {}
+        for key, value in result.items():
+            if not isinstance(key, str) or not key or key == _PROVENANCE:
+                raise ValueError(f"{name} returned a dict with the key {key!r}; keys must be "
+                                 f"non-empty strings other than {_PROVENANCE!r}")
+            arr = np.asarray(value)
+            if arr.dtype.hasobject:
+                raise ValueError(f"{name} returned {key!r} of dtype object; only numeric arrays are cached")
+            arrays[key] = arr
+        return "arrays", arrays, {}
+    raise ValueError(f"{name} must return an Estimate or a non-empty dict of arrays, "
+                     f"got {type(result).__name__}")
+
+
+def _checksum(arrays: Mapping) -> str:
+    names = sorted(arrays)
+    h = hashlib.sha256(json.dumps(names).encode())
+    h.update(array_digest(*(arrays[n] for n in names)).encode())
+    return h.hexdigest()
+
+
+class _Invalid(Exception):
+    """A cache entry that must not be used; the message says why."""
+
+
+class ReferenceCache:
+    """A folder of cached references, each verified on load and recomputed when in doubt.
+
+    Parameters
+    ----------
+    directory : str or Path, optional
+        The cache folder; default :func:`default_directory`. Created on the first write.
+    enabled : bool
+        False: :meth:`get_or_compute` always computes and nothing is read or written.
+
+    Notes
+    -----
+    Entries are ``<quantity>-<key>.npz`` files. Two processes that compute the same entry at
+    once both write it atomically; the last rename wins and both files are complete. Delete
+    the folder to clear the cache.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> cache = ReferenceCache(tmp.name)
+    >>> fields = {"quantity": "demo", "n": 3}
+    >>> result, hit = cache.get_or_compute(fields, lambda: {"x": np.arange(3.0)})
+    >>> hit, result["x"].tolist()
+    (False, [0.0, 1.0, 2.0])
+    >>> result, hit = cache.get_or_compute(fields, lambda: {"x": np.zeros(3)})
+    >>> hit, result["x"].tolist()
+    (True, [0.0, 1.0, 2.0])
+    >>> tmp.cleanup()
+    """
+
+    def __init__(self, directory=None, *, enabled: bool = True):
+        if directory is None:
+            directory = default_directory()
+        elif not isinstance(directory, (str, os.PathLike)):
+            raise ValueError(f"directory must be a path (str or Path) or None, got {type(directory).__name__}")
+        self.directory = Path(directory).expanduser()
+        self.enabled = bool(enabled)
+        self._writable = False
+
+    def __repr__(self) -> str:
+        return f"ReferenceCache({str(self.directory)!r}, enabled={self.enabled})"
+
+    def __eq__(self, other):
+        return (isinstance(other, ReferenceCache) and other.directory == self.directory
+                and other.enabled == self.enabled)
+
+    def __hash__(self):
+        return hash((self.directory, self.enabled))
+
+    def __getstate__(self):
+        # the writability probe is per process: a worker on another machine checks again
+        return {"directory": self.directory, "enabled": self.enabled, "_writable": False}
+
+    # ------------------------------------------------------------------ paths
+    def key(self, key_fields: Mapping) -> str:
+        """The entry's key: :func:`cache_key` of ``key_fields``."""
+        return cache_key(key_fields)
+
+    def path(self, key_fields: Mapping) -> Path:
+        """Where the entry of ``key_fields`` lives (whether or not it exists)."""
+        label = str(key_fields.get("quantity", "entry")) if isinstance(key_fields, Mapping) else "entry"
+        label = "".join(c if c.isalnum() or c in "-_" else "_" for c in label)[:40] or "entry"
+        return self.directory / f"{label}-{self.key(key_fields)}.npz"
+
+    def _ensure_writable(self) -> None:
+        """Create the folder and check that a file can be made in it, before any computing."""
+        if self._writable:
+            return
+        try:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryFile(dir=self.directory, prefix=".probe-"):
+                pass
+        except OSError as exc:
+            raise CacheError(
+                f"cannot write the reference cache directory {str(self.directory)!r} "
+                f"({type(exc).__name__}: {exc.strerror or exc}). Choose another directory "
+                f"(ReferenceCache(directory=...), the {CACHE_ENV} environment variable) or "
+                f"disable the cache (ReferenceCache(enabled=False))."
+            ) from exc
+        self._writable = True
+
+    # ------------------------------------------------------------------ load / store
+    def load(self, key_fields: Mapping, *, expected: Mapping | None = None):
+        """The verified entry of ``key_fields``, or None when there is none or it fails a check.
+
+        Parameters
+        ----------
+        key_fields : mapping
+        expected : mapping of str to tuple, optional
+            Shapes the named arrays must have (e.g. ``{"value": (H, W)}``).
+
+        Returns
+        -------
+        Estimate, dict of str to ndarray, or None
+            A failed check issues a :class:`CacheWarning` naming the file and the reason.
+        """
+        if not self.enabled:
+            return None
+        key = self.key(key_fields)
+        path = self.path(key_fields)
+        if not path.exists():
+            return None
+        try:
+            return self._read(path, key, expected)
+        except _Invalid as exc:
+            reason = str(exc)
+        except Exception as exc:   # noqa: BLE001 - any failure to parse means: do not trust it
+            reason = f"unreadable ({type(exc).__name__}: {exc})"
+        warnings.warn(f"reference cache entry {str(path)!r} is not usable: {reason}; recomputing it",
+                      CacheWarning, stacklevel=3)
+        return None
+
+    def _read(self, path: Path, key: str, expected: Mapping | None):
+        # our own handle: np.load leaks the one it opens when the zip directory is damaged
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
+            if _PROVENANCE not in data.files:
+                raise _Invalid("it holds no provenance record (not a vobscure cache entry)")
+            try:
+                prov = json.loads(str(data[_PROVENANCE][()]))
+            except (ValueError, TypeError) as exc:
+                raise _Invalid(f"its provenance record is not JSON ({exc})") from None
+            if not isinstance(prov, dict) or prov.get("format") != CACHE_FORMAT:
+                got = prov.get("format") if isinstance(prov, dict) else type(prov).__name__
+                raise _Invalid(f"its format is {got!r}, expected {CACHE_FORMAT}")
+            if prov.get("key") != key:
+                raise _Invalid(f"it was stored under another key ({str(prov.get('key'))[:16]}..., "
+                               f"requested {key[:16]}...)")
+            records = prov.get("arrays")
+            if not isinstance(records, dict) or not records:
+                raise _Invalid("its provenance lists no arrays")
+            missing = sorted(set(records) - set(data.files))
+            if missing:
+                raise _Invalid(f"arrays {missing} listed in its provenance are missing")
+            arrays = {}
+            for name, rec in records.items():
+                arr = data[name]
+                if arr.dtype.str != rec.get("dtype") or list(arr.shape) != rec.get("shape"):
+                    raise _Invalid(f"array {name!r} is {arr.dtype.str} {arr.shape}, its record says "
+                                   f"{rec.get('dtype')} {tuple(rec.get('shape') or ())}")
+                arrays[name] = arr
+        for name, shape in (expected or {}).items():
+            if name not in arrays:
+                raise _Invalid(f"it has no array {name!r}")
+            if arrays[name].shape != tuple(shape):
+                raise _Invalid(f"array {name!r} has shape {arrays[name].shape}, expected {tuple(shape)}")
+        if _checksum(arrays) != prov.get("checksum"):
+            raise _Invalid("the checksum of its arrays does not match (modified or damaged)")
+        if prov.get("kind") == "estimate":
+            if not {"value", "stderr"} <= set(arrays) or not set(arrays) <= set(_ESTIMATE_ARRAYS):
+                raise _Invalid(f"an Estimate entry with the arrays {sorted(arrays)}")
+            samples = prov.get("samples")
+            if not isinstance(samples, int):
+                raise _Invalid(f"an Estimate entry whose sample count is {samples!r}")
+            return Estimate(value=arrays["value"], stderr=arrays["stderr"], samples=samples,
+                            bent_normal=arrays.get("bent_normal"))
+        if prov.get("kind") != "arrays":
+            raise _Invalid(f"unknown kind of entry {prov.get('kind')!r}")
+        return arrays
+
+    def store(self, key_fields: Mapping, result, *, compute_seconds: float | None = None,
+              info: Mapping | None = None) -> Path | None:
+        """Write ``result`` (an Estimate or a dict of arrays) as the entry of ``key_fields``.
+
+        Atomic: an interrupted write leaves the previous entry (or none) in place. ``info``
+        is extra provenance (JSON-able, not part of the key). Returns the file, or None when
+        the cache is disabled.
+
+        Raises
+        ------
+        CacheError
+            When the folder cannot be created or written.
+        """
+        kind, arrays, extra = _as_arrays(result, "result")
+        if not self.enabled:
+            return None
+        self._ensure_writable()
+        versioned = _versioned(key_fields)
+        provenance = {
+            "format": CACHE_FORMAT,
+            "key": self.key(key_fields),
+            "fields": versioned,
+            "reference_code_version": REFERENCE_CODE_VERSION,
+            "library_version": _library_version(),
+            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "compute_seconds": None if compute_seconds is None else round(float(compute_seconds), 6),
+            "kind": kind,
+            "arrays": {n: {"dtype": a.dtype.str, "shape": list(a.shape)} for n, a in arrays.items()},
+            "checksum": _checksum(arrays),
+            "info": json.loads(canonical_json(info or {})),
+            **extra,
+        }
+        path = self.path(key_fields)
+        try:
+            return save_npz(path, provenance, **arrays)
+        except OSError as exc:
+            raise CacheError(f"cannot write the reference cache entry {str(path)!r} "
+                             f"({type(exc).__name__}: {exc})") from exc
+
+    def provenance(self, key_fields: Mapping) -> dict | None:
+        """The provenance record of the (verified) entry of ``key_fields``, or None."""
+        if self.load(key_fields) is None:
+            return None
+        with open(self.path(key_fields), "rb") as fh, np.load(fh, allow_pickle=False) as data:
+            return json.loads(str(data[_PROVENANCE][()]))
+
+    def get_or_compute(self, key_fields: Mapping, compute: Callable[[], object], *,
+                       expected: Mapping | None = None, info: Mapping | None = None) -> tuple[object, bool]:
+        """The cached result of ``key_fields``, or ``compute()`` stored under it.
+
+        Parameters
+        ----------
+        key_fields : mapping of str to JSON-able values
+            Everything the result depends on (hash arrays with :func:`array_digest`,
+            :func:`scene_digest` or :func:`gbuffer_digest` first). The versions are added.
+        compute : callable
+            Called with no argument on a miss; returns an :class:`~vobscure.Estimate` or a
+            non-empty dict of numeric arrays.
+        expected : mapping of str to tuple, optional
+            Shapes that the named arrays of a cached entry must have (see :meth:`load`).
+        info : mapping, optional
+            Extra provenance stored with a new entry (not part of the key).
+
+        Returns
+        -------
+        result : Estimate or dict of str to ndarray
+            Bit for bit what ``compute`` returned, now or on the run that stored it.
+        hit : bool
+            True when it came from the cache.
+
+        Raises
+        ------
+        CacheError
+            When the folder cannot be written; raised before ``compute`` is called.
+        """
+        if not callable(compute):
+            raise ValueError(f"compute must be a callable with no arguments, got {type(compute).__name__}")
+        canonical_json(key_fields)   # reject bad fields before any work
+        canonical_json(info or {})
+        if self.enabled:
+            cached = self.load(key_fields, expected=expected)
+            if cached is not None:
+                return cached, True
+            self._ensure_writable()
+        t0 = time.perf_counter()
+        result = compute()
+        seconds = time.perf_counter() - t0
+        _as_arrays(result)   # check the type even when nothing is stored
+        if self.enabled:
+            self.store(key_fields, result, compute_seconds=seconds, info=info)
+        return result, False
+
+
+# ----------------------------------------------------------------------------- helpers
+def _as_cache(cache) -> ReferenceCache:
+    if cache is None:
+        return ReferenceCache(enabled=False)
+    if not isinstance(cache, ReferenceCache):
+        raise ValueError(f"cache must be a ReferenceCache or None, got {type(cache).__name__}")
+    return cache
+
+
+def _seed(seed) -> int:
+    """A cached result must be reproducible: only an integer seed names one."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be a non-negative int to cache a reference (a Generator or None "
+                         f"gives numbers no key can name), got {seed!r}")
+    return int(seed)
+
+
+def _scene_info(scene) -> dict:
+    """Provenance of the scene (not part of the key)."""
+    name = getattr(scene, "name", None)
+    return {"scene_name": None if name is None else str(name)}
+
+
+def ground_truth_cached(scene, gbuffer, *, cache, quantity: str = "ao", radius=None, rays: int = 256,
+                        samples: int = 4096, falloff=None, weighting: str = "cosine",
+                        normal_clamp: bool = False, seed=0, groups=None, allow_open: bool = False,
+                        threads=None, progress: bool = True) -> tuple[Estimate, bool]:
+    """:func:`vobscure.ground_truth`, cached.
+
+    Parameters
+    ----------
+    scene : Scene or trimesh.Trimesh
+    gbuffer : GBuffer
+    cache : ReferenceCache or None
+        None computes without caching.
+    quantity, radius, rays, samples, falloff, weighting, normal_clamp, seed, groups, allow_open
+        As in :func:`vobscure.ground_truth`; ``seed`` must be an int. The key holds only the
+        parameters that ``quantity`` uses (rays for ao and obscurance, samples, falloff and
+        normal_clamp for volumetric, ...), with the defaults filled in, so equivalent calls
+        share an entry.
+    threads, progress
+        Passed on; they do not change the numbers and are not part of the key.
+
+    Returns
+    -------
+    estimate : Estimate
+        (H, W) value and stderr, NaN on background.
+    hit : bool
+        True when it came from the cache.
+
+    Notes
+    -----
+    The key holds :func:`scene_digest` of the scene, :func:`gbuffer_digest` (world) of the
+    G-buffer's hits and its camera, the parameters, the seed and the versions.
+    """
+    from ..gbuffer import GBuffer
+    from ..groundtruth import DEFAULT_GROUPS, OBSCURANCE_FALLOFFS, QUANTITIES, VO_FALLOFFS, ground_truth
+
+    cache = _as_cache(cache)
+    if not isinstance(gbuffer, GBuffer):
+        raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
+    check_choice(quantity, "quantity", QUANTITIES)
+    seed = _seed(seed)
+    groups = DEFAULT_GROUPS if groups is None else check_int(groups, "groups", minimum=2)
+    if radius is not None:
+        radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
+    elif quantity != "ao":
+        raise ValueError(f"radius is required for quantity={quantity!r}")
+    params: dict = {"radius": radius, "groups": groups}
+    if quantity in ("ao", "obscurance"):
+        params.update(rays=check_int(rays, "rays", minimum=2), weighting=weighting)
+        if quantity == "ao" and radius is not None and math.isinf(radius):
+            params["radius"] = None   # the same computation as radius=None
+    if quantity == "obscurance":
+        falloff = "linear" if falloff is None else falloff
+        if not isinstance(falloff, str):
+            raise ValueError("falloff must be the name of a falloff to cache an obscurance reference "
+                             f"({', '.join(OBSCURANCE_FALLOFFS)}), got {type(falloff).__name__}")
+        params["falloff"] = falloff
+    if quantity == "volumetric":
+        falloff = "constant" if falloff is None else falloff
+        check_choice(falloff, "falloff", VO_FALLOFFS)
+        params.update(samples=check_int(samples, "samples", minimum=2), falloff=falloff,
+                      normal_clamp=bool(normal_clamp))
+    fields = {"kind": "ground_truth", "quantity": quantity, "scene": scene_digest(scene),
+              "gbuffer": gbuffer_digest(gbuffer, world=True), "camera": gbuffer.camera.to_dict(),
+              "params": params, "seed": seed}
+
+    def compute():
+        return ground_truth(scene, gbuffer, quantity=quantity, radius=radius, rays=rays, samples=samples,
+                            falloff=falloff, weighting=weighting, normal_clamp=normal_clamp, seed=seed,
+                            progress=progress, groups=groups, threads=threads, allow_open=allow_open)
+
+    return cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape, "stderr": gbuffer.shape},
+                                info=_scene_info(scene))
+
+
+def screen_reference_cached(gbuffer, scene=None, *, cache, radius, samples: int = 4096,
+                            normal_clamp: bool = False, thickness=None, falloff: str = "constant",
+                            seed=0, fetch: str = "bilinear", offscreen: str = "clamp") -> tuple[np.ndarray, bool]:
+    """:func:`vobscure.vo_reference` (the converged screen-space VO), cached.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+    scene : Scene, optional
+        Recorded in the entry's provenance only: the G-buffer alone decides the numbers.
+    cache : ReferenceCache or None
+        None computes without caching.
+    radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen
+        As in :func:`vobscure.vo_reference`; ``seed`` must be an int.
+
+    Returns
+    -------
+    visibility : (H, W) ndarray
+        NaN on background.
+    hit : bool
+
+    Notes
+    -----
+    The key holds :func:`gbuffer_digest` of the G-buffer's depth and normal images (in
+    their dtype), its camera, the parameters, the seed and the versions.
+    """
+    from ..gbuffer import GBuffer
+    from ..screenspace import vo_reference
+
+    cache = _as_cache(cache)
+    if not isinstance(gbuffer, GBuffer):
+        raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
+    seed = _seed(seed)
+    radius = check_positive(radius, "radius")
+    samples = check_int(samples, "samples", minimum=2)
+    if thickness is not None:
+        thickness = check_positive(thickness, "thickness")
+    fields = {"kind": "screen_reference", "quantity": "screen",
+              "gbuffer": gbuffer_digest(gbuffer), "camera": gbuffer.camera.to_dict(),
+              "params": {"radius": radius, "samples": samples, "normal_clamp": bool(normal_clamp),
+                         "thickness": thickness, "falloff": str(falloff), "fetch": str(fetch),
+                         "offscreen": str(offscreen)},
+              "seed": seed}
+
+    def compute():
+        value = vo_reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
+                             thickness=thickness, falloff=falloff, seed=seed, fetch=fetch,
+                             offscreen=offscreen)
+        return {"value": value}
+
+    info = None if scene is None else _scene_info(scene)
+    result, hit = cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape}, info=info)
+    return result["value"], hit
