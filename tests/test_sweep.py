@@ -263,3 +263,18 @@ def test_markdown_table(tmp_path, threaded):
     assert table[2].split("|")[header.index("method") + 1].strip() == "line"
     with pytest.raises(ValueError, match=r"results\[0\]"):
         results_to_markdown([{"method": "line"}])
+
+
+def test_the_package_attribute_is_the_sweep_function():
+    """``vobscure.experiments.sweep(configs, executor=...)`` as the issue spells it."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import vobscure as vo
+    from vobscure.experiments.sweep import SweepConfig, sweep
+
+    configs = [SweepConfig("slab", "line", 5, size=(8, 8), radius=0.5, references=("screen",),
+                           reference_samples=32)]
+    with ThreadPoolExecutor(1) as pool:
+        a = vo.experiments.sweep(configs, executor=pool, progress=False)
+        b = sweep(configs, executor=pool, progress=False)
+    assert a[0].errors["screen"].rmse == b[0].errors["screen"].rmse

@@ -11,7 +11,7 @@ from .camera import Camera
 from .estimate import Estimate
 from .gbuffer import GBuffer, render_gbuffer
 from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric_obscurance
-from .metrics import ErrorReport, error
+from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flicker
 from .raytrace import Tracer
 from .scenes import Scene
 from .screenspace import bilateral_blur, combine_radii, vo_line, vo_point, vo_reference
@@ -25,8 +25,10 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "Camera",
+    "Decomposition",
     "ErrorReport",
     "Estimate",
+    "Flicker",
     "GBuffer",
     "Scene",
     "Tracer",
@@ -34,8 +36,10 @@ __all__ = [
     "ambient_occlusion",
     "bilateral_blur",
     "combine_radii",
+    "decompose",
     "error",
     "experiments",
+    "flicker",
     "ground_truth",
     "obscurance",
     "render_gbuffer",

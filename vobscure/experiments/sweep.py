@@ -600,3 +600,15 @@ def results_to_markdown(results, path=None) -> str:
         data = text.encode()
         atomic_write(path, lambda fh: fh.write(data))
     return text
+
+
+class _CallableModule(__import__("types").ModuleType):
+    """Lets ``vobscure.experiments.sweep(configs, executor=...)`` call :func:`sweep` while
+    ``vobscure.experiments.sweep.SweepConfig`` etc. stay reachable (the module and its main
+    function share a name)."""
+
+    def __call__(self, configs, **kwargs):
+        return sweep(configs, **kwargs)
+
+
+__import__("sys").modules[__name__].__class__ = _CallableModule
