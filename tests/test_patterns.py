@@ -1,0 +1,391 @@
+"""Sample patterns (Loos & Sloan 2010, Sec. 4.5, footnote 5): generators, weights, the quality
+metric and its closed forms, and the precomputed tables in data/patterns/."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from vobscure import patterns as P
+from vobscure.patterns import SamplePattern, ball, cap_volume, crease_volume, disk, quality
+
+from conftest import FALSE_FAILURE
+
+V_BALL = 4.0 * np.pi / 3.0
+#: Closed forms evaluated two ways (identities between float64 evaluations).
+EXACT_TOL = 1e-12
+#: Nested adaptive quadrature of the chord lengths against the closed-form crease volume
+#: (requested 1e-10).
+QUADRATURE_TOL = 1e-7
+#: Discrete Voronoi weights against the exact region integral: a region's boundary can move by
+#: at most half a grid cell, i.e. by half a cell times the ball's cross-section there
+#: (pi (1 - c^2) at the plane at distance c) over the ball's volume. Measured at c = 0.45:
+#: 4.7e-4 (disk, 512^2) and 1.8e-3 (ball, 128^3); the bounds are 1.2e-3 and 4.7e-3.
+def _grid_tol(dim: int, c: float) -> float:
+    cell = 2.0 / (P.DISK_GRID if dim == 2 else P.BALL_GRID)
+    return 0.5 * cell * np.pi * (1 - c * c) / V_BALL
+
+#: A dense grid pattern integrates every configuration almost exactly: RMS quadrature error of
+#: a 60^2-cell disk pattern (measured 1.1e-4) and a 20^3-cell ball pattern (measured 9e-4).
+DENSE_TOL = {2: 5e-4, 3: 2e-3}
+#: The generation budget of the issue: one pattern of up to 33 points in two minutes.
+GENERATION_SECONDS = 120.0
+
+CHEAP = ("poisson", "sobol", "halton", "random", "spiral")
+
+
+def _crit(tests: int = 1) -> float:
+    """Two-sided normal critical value, Bonferroni-corrected over ``tests`` assertions."""
+    return float(stats.norm.ppf(1.0 - FALSE_FAILURE / (2.0 * tests)))
+
+
+def _uniform_ball(rng, count):
+    x = rng.normal(size=(count, 3))
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    return x * rng.random((count, 1)) ** (1.0 / 3.0)
+
+
+# --- closed forms ----------------------------------------------------------------------------
+
+def test_cap_volume_is_hegeman_eq4():
+    assert cap_volume(0.0) == 0.0
+    assert cap_volume(1.0) == pytest.approx(V_BALL / 2, abs=EXACT_TOL)
+    assert cap_volume(2.0) == pytest.approx(V_BALL, abs=EXACT_TOL)
+    # against Monte Carlo: the fraction of uniform points with z > 1 - h
+    rng = np.random.default_rng(1)
+    x = _uniform_ball(rng, 200_000)
+    hs = np.array([0.2, 0.7, 1.3, 1.9])
+    p = np.array([np.mean(x[:, 2] > 1 - h) for h in hs])
+    z = (p - cap_volume(hs) / V_BALL) / np.sqrt(p * (1 - p) / len(x))
+    assert np.all(np.abs(z) < _crit(len(hs)))
+
+
+def test_crease_volume_identities():
+    # two perpendicular planes through the centre: a quarter of the ball
+    assert crease_volume([0, 0, 1], 0.0, [1, 0, 0], 0.0) == pytest.approx(V_BALL / 4, abs=EXACT_TOL)
+    rng = np.random.default_rng(2)
+    n1, n2 = rng.normal(size=(500, 3)), rng.normal(size=(500, 3))
+    t1, t2 = rng.uniform(-1.2, 1.2, 500), rng.uniform(-1.2, 1.2, 500)
+    v = crease_volume(n1, t1, n2, t2)
+    assert v.shape == (500,) and np.all((v >= 0) & (v <= V_BALL))
+    # the second plane splits the first half-space: V(1, 2) + V(1, -2) = V_ball - V_cap(1 - t1)
+    split = v + crease_volume(n1, t1, -n2, -t2)
+    np.testing.assert_allclose(split, V_BALL - cap_volume(1 - t1), atol=EXACT_TOL)
+    # the order of the planes does not matter; scaling a normal does not either
+    np.testing.assert_allclose(crease_volume(n2, t2, n1, t1), v, atol=EXACT_TOL)
+    np.testing.assert_allclose(crease_volume(3 * n1, t1, n2, t2), v, atol=EXACT_TOL)
+    # a plane outside the ball leaves the other one's cap
+    np.testing.assert_allclose(crease_volume(n1, t1, n2, 2.0), V_BALL - cap_volume(1 - t1), atol=EXACT_TOL)
+    assert crease_volume(n1[0], t1[0], n2[0], -2.0) == 0.0
+    # parallel planes: the same direction (the nearer plane), opposite (a slab), disjoint
+    a = np.array([0.0, 0.6, 0.8])
+    assert crease_volume(a, 0.3, a, -0.2) == pytest.approx(V_BALL - cap_volume(1.2), abs=EXACT_TOL)
+    slab = V_BALL - cap_volume(1 - 0.3) - cap_volume(1 - 0.2)
+    assert crease_volume(a, 0.3, -a, 0.2) == pytest.approx(slab, abs=EXACT_TOL)
+    assert crease_volume(a, -0.5, -a, -0.5) == 0.0
+
+
+def test_crease_volume_against_quadrature():
+    """Independent: the open volume as the integral over the disk of the open chord length
+    below the height field min(h1, h2), by nested adaptive quadrature in polar coordinates
+    (the inner one told where the integrand has kinks)."""
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        n1, n2 = P._hemisphere(rng, 1)[0], P._hemisphere(rng, 1)[0]
+        t1, t2 = rng.uniform(-0.6, 0.6, 2)
+
+        def along(phi):
+            c, s = np.cos(phi), np.sin(phi)
+            # on this ray h_i(r) = alpha_i - beta_i r
+            alpha = np.array([t1 / n1[2], t2 / n2[2]])
+            beta = np.array([(n1[0] * c + n1[1] * s) / n1[2], (n2[0] * c + n2[1] * s) / n2[2]])
+            kinks = [(alpha[0] - alpha[1]) / (beta[0] - beta[1])]
+            for a, b in zip(alpha, beta):       # h_i = +-sqrt(1 - r^2)
+                kinks += list(np.roots([1 + b * b, -2 * a * b, a * a - 1]).real)
+            kinks = sorted(k for k in kinks if 0 < k < 1)
+
+            def chord(r):
+                z_s = np.sqrt(max(0.0, 1 - r * r))
+                h = min(alpha - beta * r)
+                return (min(max(h, -z_s), z_s) + z_s) * r
+
+            return integrate.quad(chord, 0, 1, points=kinks or None, epsabs=1e-11, epsrel=1e-11, limit=200)[0]
+
+        value, _ = integrate.quad(along, 0, 2 * np.pi, epsabs=1e-10, epsrel=1e-10, limit=400)
+        assert abs(value - crease_volume(n1, t1, n2, t2)) < QUADRATURE_TOL
+
+
+def test_crease_volume_against_monte_carlo():
+    rng = np.random.default_rng(4)
+    x = _uniform_ball(rng, 200_000)
+    cases = 8
+    n1, n2 = rng.normal(size=(cases, 3)), rng.normal(size=(cases, 3))
+    n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+    n2 /= np.linalg.norm(n2, axis=1, keepdims=True)
+    t1, t2 = rng.uniform(-0.8, 0.8, cases), rng.uniform(-0.8, 0.8, cases)
+    exact = crease_volume(n1, t1, n2, t2) / V_BALL
+    p = np.array([np.mean((x @ n1[i] <= t1[i]) & (x @ n2[i] <= t2[i])) for i in range(cases)])
+    se = np.sqrt(np.maximum(p * (1 - p), 1e-12) / len(x))
+    assert np.all(np.abs(p - exact) / se < _crit(cases))
+
+
+# --- the quality metric ----------------------------------------------------------------------
+
+def test_quality_estimates_agree_with_the_exact_values_for_dense_patterns():
+    g2 = P._grid(2, 60)
+    dense_disk = SamplePattern(g2, 2 * np.sqrt(1 - np.sum(g2 * g2, axis=1)))
+    g3 = P._grid(3, 20)
+    dense_ball = SamplePattern(g3, np.ones(len(g3)))
+    for family in P.FAMILIES:
+        assert quality(dense_disk, trials=500, family=family).value < DENSE_TOL[2], family
+        assert quality(dense_ball, trials=500, family=family).value < DENSE_TOL[3], family
+
+
+def test_symmetric_patterns_are_exact_on_planes_through_the_centre():
+    cfg = P._configurations(512, 0, "cap")
+    through = dataclasses.replace(cfg, t1=np.zeros(512), exact=np.full(512, 0.5))
+    for p in (disk(9), disk(12), ball(12), ball(40), disk(7, method="sobol", seed=3)):
+        np.testing.assert_allclose(P._estimates(p, through), 0.5, atol=EXACT_TOL)
+    # a point sample at the centre lies on the surface and reads open (occupied means behind
+    # the surface, as in vo_point): the pairs give 0.5, the centre its whole weight
+    odd = ball(33)
+    np.testing.assert_allclose(P._estimates(odd, through), 0.5 + 0.5 * odd.weights[0], atol=EXACT_TOL)
+    plain = disk(9, method="random", symmetric=False, seed=3)
+    assert np.max(np.abs(P._estimates(plain, through) - 0.5)) > 0.01
+
+
+def test_quality_is_reproducible_and_its_stderr_honest():
+    p = disk(9)
+    assert quality(p, trials=4000, seed=5).value == quality(p, trials=4000, seed=5).value
+    pats = [disk(5), disk(16, method="sobol", symmetric=False), ball(12), ball(20, method="random")]
+    z = []
+    for p in pats:
+        a, b = quality(p, trials=4000, seed=6), quality(p, trials=4000, seed=np.random.default_rng(7))
+        z.append((a.value - b.value) / np.hypot(a.stderr, b.stderr))
+    assert np.all(np.abs(z) < _crit(len(pats))), z
+
+
+def test_quality_orders_patterns_as_expected():
+    """More samples and a better pattern both lower the error (common random numbers)."""
+    assert quality(disk(16)).value < quality(disk(5)).value
+    assert quality(disk(16)).value < quality(disk(16, method="random", symmetric=False)).value
+    assert quality(ball(33)).value < quality(ball(33, method="random", symmetric=False)).value
+
+
+# --- weights ---------------------------------------------------------------------------------
+
+def test_footnote5_weights_against_exact_region_integrals():
+    assert P.voronoi_weights(np.array([[0.3, 0.2]])).tolist() == [1.0]
+    for dim in (2, 3):
+        # two samples on the z (disk: y) axis split the region at c = 0.45: the far one's region
+        # is a cap of height 0.55 (the disk's region, weighted by the chord 2 z_s, is the same cap)
+        pts = np.zeros((2, dim))
+        pts[:, -1] = (0.1, 0.8)
+        w = P.voronoi_weights(pts)
+        assert w[1] == pytest.approx(cap_volume(0.55) / V_BALL, abs=_grid_tol(dim, 0.45))
+        assert w.sum() == pytest.approx(1.0, abs=EXACT_TOL)
+
+
+def test_symmetric_weights_are_exactly_symmetric():
+    for p in (disk(33), ball(40), disk(8, method="halton", seed=2)):
+        j = np.argmin(np.linalg.norm(p.points[None, :, :] + p.points[:, None, :], axis=2), axis=1)
+        np.testing.assert_array_equal(p.weights[j], p.weights)
+
+
+# --- generators ------------------------------------------------------------------------------
+
+def _check_valid(p, n, dim, *, symmetric, center):
+    assert isinstance(p, SamplePattern)
+    assert p.points.shape == (n, dim) and p.weights.shape == (n,)
+    assert np.all(np.sum(p.points ** 2, axis=1) <= 1.0)
+    assert np.all(p.weights >= 0) and p.weights.sum() == pytest.approx(1.0, abs=EXACT_TOL)
+    if symmetric:
+        assert p.is_symmetric
+    if center:
+        assert p.has_center and np.array_equal(p.points[0], np.zeros(dim))
+    assert p.provenance["version"] == P.GENERATOR_VERSION and p.provenance["n"] == n
+
+
+@pytest.mark.parametrize("method", P.METHODS)
+@pytest.mark.parametrize("domain", ["disk", "ball"])
+def test_every_method_gives_valid_patterns(method, domain):
+    fn, dim = (disk, 2) if domain == "disk" else (ball, 3)
+    counts = (1, 2, 3, 7, 8) if method in CHEAP else (1, 2, 3)     # the slow ones from the tables
+    for n in counts:
+        sym = fn(n, method=method)
+        _check_valid(sym, n, dim, symmetric=True, center=n % 2 == 1)
+        plain = fn(n, method=method, symmetric=False)
+        _check_valid(plain, n, dim, symmetric=False, center=False)
+        if method in CHEAP or domain == "disk":          # no ball table has the centre forced
+            forced = fn(n, method=method, symmetric=False, center=True)
+            _check_valid(forced, n, dim, symmetric=False, center=True)
+        if method not in ("spiral",) and n >= 3:
+            assert not plain.is_symmetric
+        assert sym.method == method
+
+
+def test_seeds():
+    for method in ("poisson", "sobol", "halton", "random"):
+        a, b = disk(6, method=method, seed=11), disk(6, method=method, seed=11)
+        assert np.array_equal(a.points, b.points) and np.array_equal(a.weights, b.weights)
+        assert not np.array_equal(a.points, disk(6, method=method, seed=12).points)
+        g = ball(5, method=method, seed=np.random.default_rng(11))
+        assert g.provenance["seed"] is None and g.points.shape == (5, 3)
+    # the spiral is deterministic: the seed is accepted and unused
+    assert np.array_equal(disk(10, method="spiral", seed=1).points, disk(10, method="spiral", seed=2).points)
+
+
+def test_results_are_copies():
+    p = disk(9)
+    p.points[0] = 0.5
+    assert disk(9).points[0, 0] == 0.0
+
+
+def test_a_seed_no_table_has_is_generated():
+    # (the electrostatic generator itself runs in test_table_entries_regenerate_bit_for_bit)
+    p = disk(3, method="lloyd", symmetric=False, seed=5)
+    assert p.provenance["source"] == "generated"
+    _check_valid(p, 3, 2, symmetric=False, center=False)
+
+
+# --- tables ----------------------------------------------------------------------------------
+
+FAMILIES = [(domain, method, variant) for domain, dim in (("disk", 2), ("ball", 3))
+            for method in P.METHODS for variant in P.VARIANTS[dim]]
+
+
+@pytest.mark.parametrize("domain,method,variant", FAMILIES)
+def test_tables_load_and_their_quality_is_reproduced(domain, method, variant):
+    dim = 2 if domain == "disk" else 3
+    table = P.load_table(domain, method, variant=variant)
+    assert sorted(table) == P._table_counts(dim, method, variant)
+    for n, p in table.items():
+        symmetric, center = P._variant_flags(variant, n)
+        _check_valid(p, n, dim, symmetric=symmetric, center=center)
+    # the recorded quality is a fresh quality() evaluation with the recorded settings
+    for n in (1, 2, 5, 9, 16, 33):
+        rec = table[n].provenance
+        q = quality(table[n], trials=P.QUALITY_TRIALS, seed=P.QUALITY_SEED)
+        assert rec["quality"] == pytest.approx(float(q.value), rel=EXACT_TOL, abs=EXACT_TOL)
+        assert rec["quality_stderr"] == pytest.approx(float(q.stderr), rel=1e-9, abs=EXACT_TOL)
+
+
+@pytest.mark.parametrize("dim,method,variant,n", [
+    (2, "electrostatic", "symmetric", 3),
+    (3, "electrostatic", "plain", 2),
+    (2, "lloyd", "plain", 3),
+    (3, "sobol", "symmetric", 5),
+    (2, "poisson", "center", 6),
+])
+def test_table_entries_regenerate_bit_for_bit(dim, method, variant, n):
+    symmetric, center = P._variant_flags(variant, n)
+    stored = P.load_table(P._DOMAIN[dim], method, variant=variant)[n]
+    fresh = P._generate(dim, n, method, symmetric, center, 0)
+    assert np.array_equal(fresh.points, stored.points)
+    assert np.array_equal(fresh.weights, stored.weights)
+
+
+def test_defaults_are_the_best_symmetric_table_entries():
+    for domain, fn, top in (("disk", disk, 33), ("ball", ball, 40)):
+        tables = {m: P.load_table(domain, m) for m in P.METHODS}
+        for n in list(range(1, top + 1)) + list(P.TABLE_EXTRA_N):
+            p = fn(n)
+            assert p.is_symmetric and p.method == P.best_method(domain, n)
+            assert p.provenance["source"] == f"table {domain}_{p.method}_symmetric.npz"
+            recorded = {m: t[n].provenance["quality"] for m, t in tables.items() if n in t}
+            assert p.provenance["quality"] == min(recorded.values())
+            assert p.provenance["selection"]["candidates"] == recorded
+    # another seed runs the chosen generator with that seed
+    assert disk(6, seed=4).method == P.best_method("disk", 6)
+    assert P.best_method("ball", 1000) == P.BEST_FALLBACK
+
+
+def test_missing_or_stale_tables_fall_back_to_generation(tmp_path, monkeypatch):
+    try:
+        written = P.build_tables(tmp_path, quick=True, methods=("random",), dims=(2,), progress=False)
+        assert sorted(p.name for p in written) == ["disk_random_center.npz", "disk_random_plain.npz",
+                                                   "disk_random_symmetric.npz"]
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in written)   # atomic
+        table = P.load_table("disk", "random", variant="plain", directory=tmp_path)
+        assert sorted(table) == [1, 2, 3, 4]
+        assert np.array_equal(table[4].points, disk(4, method="random", symmetric=False).points)
+        monkeypatch.setattr(P, "TABLE_DIR", tmp_path)
+        P._cached.cache_clear()
+        P._best.cache_clear()
+        assert disk(4, method="random").provenance["source"] == "table disk_random_symmetric.npz"
+        assert disk(4).method == "random"                  # the only table here
+        assert disk(5, method="sobol").provenance["source"] == "generated"        # no such table
+        monkeypatch.setattr(P, "GENERATOR_VERSION", P.GENERATOR_VERSION + 1)
+        P._cached.cache_clear()
+        assert P.load_table("disk", "random", variant="plain", directory=tmp_path) == {}
+        assert disk(4, method="random").provenance["source"] == "generated"       # stale table
+    finally:
+        P._cached.cache_clear()
+        P._read_table.cache_clear()
+        P._best.cache_clear()
+
+
+@pytest.mark.slow
+def test_generation_time_budget():
+    for fn, n in ((disk, 33), (ball, 33)):
+        for symmetric in (True, False):
+            for method in ("electrostatic", "lloyd"):
+                t0 = time.perf_counter()
+                fn(n, method=method, symmetric=symmetric, seed=123)
+                assert time.perf_counter() - t0 < GENERATION_SECONDS, (fn.__name__, method, symmetric)
+
+
+# --- the paper-claims analysis ----------------------------------------------------------------
+
+def test_claims_analysis_finds_a_planted_dip():
+    from vobscure.experiments.figures import patterns_quality as F
+
+    rng = np.random.default_rng(8)
+    ns = np.arange(1, 41)
+    base = 0.1 * ns ** -1.0
+    data = {}
+    for key in F.PAPER_CLAIMS:
+        dip = {"disk-center": 9, "disk-plain": 13, "ball-plain": 12}[key]
+        value = base * np.where(ns == dip, 0.6, 1.0)
+        err2 = {int(n): value[i] ** 2 * rng.chisquare(1, 20000) for i, n in enumerate(ns)}
+        rms = np.array([np.sqrt(np.mean(err2[int(n)])) for n in ns])
+        data[key] = {"electrostatic": F.Family(ns, rms, rms * 0.01, err2)}
+    rows = F.paper_claims(data)
+    verdict = {(r["family"], r["n"]): r["verdict"] for r in rows if r["n"] is not None}
+    assert verdict[("disk-center", 9)] == verdict[("disk-plain", 13)] == verdict[("ball-plain", 12)] == "confirmed"
+    assert verdict[("disk-center", 5)] == "not confirmed"
+    found = {r["family"]: r["found"] for r in rows if r["n"] is None}
+    assert found == {"disk-center": [9], "disk-plain": [13], "ball-plain": [12]}
+
+
+# --- arguments -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("call,match", [
+    (lambda: disk(0), "n"),
+    (lambda: disk(2.5), "n"),
+    (lambda: ball(True), "n"),
+    (lambda: disk(5, method="lattice"), "method must be one of 'best', 'electrostatic'"),
+    (lambda: disk(5, symmetric="yes"), "symmetric"),
+    (lambda: disk(4, center=True), "center"),
+    (lambda: ball(5, center=False), "center"),
+    (lambda: disk(5, center="yes", symmetric=False), "center"),
+    (lambda: disk(5, seed=-1), "seed"),
+    (lambda: ball(5, method="random", seed="a"), "seed"),
+    (lambda: quality(np.zeros((3, 2))), "pattern"),
+    (lambda: quality(disk(3, method="random"), trials=1), "trials"),
+    (lambda: quality(disk(3, method="random"), family="sphere"), "family"),
+    (lambda: quality(disk(3, method="random"), seed=-2), "seed"),
+    (lambda: P.voronoi_weights(np.zeros((3, 4))), "points"),
+    (lambda: P.voronoi_weights(np.zeros((3, 2)), grid=1), "grid"),
+    (lambda: P.load_table("cube"), "domain"),
+    (lambda: P.load_table("ball", variant="center"), "variant"),
+    (lambda: P.build_tables(methods=("lattice",)), "methods"),
+    (lambda: SamplePattern(np.ones((2, 2)), np.ones(2)), "inside"),
+])
+def test_bad_arguments_name_the_argument(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
