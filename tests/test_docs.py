@@ -114,3 +114,16 @@ def test_home_page_example_runs(capsys):
     lines, truth = namespace["lines"], namespace["truth"]
     assert lines.shape == truth.value.shape == (48, 64)
     assert "ErrorReport(" in capsys.readouterr().out
+
+
+def test_compare_page_example_runs(tmp_path, monkeypatch):
+    """The Python example of docs/compare.md runs as written and returns one row per method."""
+    blocks = _python_blocks(DOCS / "compare.md")
+    assert len(blocks) == 1, "compare.md lost its example"
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "__compare_page__"}
+    exec(compile(blocks[0], str(DOCS / "compare.md"), "exec"), namespace)
+    rows = namespace["res"].rows
+    assert [(r["method"], r["samples"]) for r in rows] == [("line", 5), ("point", 12)]
+    assert all(0.0 <= r["screen_rmse"] < 1.0 for r in rows)
+    assert not any(tmp_path.iterdir()), "write=False wrote files"

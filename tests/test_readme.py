@@ -27,6 +27,22 @@ def test_readme_example_runs(capsys):
 
 
 def test_readme_commands():
+    """The README's install line runs the main job, and .ci/run runs what the README says."""
     text = README.read_text()
-    assert 'python -m pip install -e ".[test]" && vobscure render' in text
+    assert 'python -m pip install -e ".[test]" && vobscure compare' in text
     assert "python -m pytest" in text
+    ci = (README.parent / ".ci" / "run").read_text()
+    assert 'python -m pip install -e ".[test]"' in ci and "vobscure compare" in ci
+    assert "python -m pytest" in ci
+
+
+def test_readme_images_and_links_exist():
+    """Every image and relative link of the README points at a file of the repository."""
+    import re
+
+    text = README.read_text()
+    targets = re.findall(r"\]\(([^)#\s]+)\)", text)
+    assert any(t.endswith("tradeoff.png") for t in targets), "the README lost the trade-off plot"
+    for target in targets:
+        if "://" not in target:
+            assert (README.parent / target).exists(), f"README links to missing {target}"

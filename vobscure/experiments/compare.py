@@ -447,14 +447,15 @@ def _markdown(rows, provenance) -> str:
     cols = [c for c in _columns(rows) if c not in ("normal_clamp", "thickness")]
     lines = [f"# vobscure compare: {provenance['scene']}", "",
              f"Camera {provenance['camera']['size'][0]} x {provenance['camera']['size'][1]}, "
-             f"normal clamp: {_fmt(provenance['normal_clamp'])}, thickness: {_fmt(provenance['thickness'])}, "
+             f"normal clamp: {_fmt(provenance['normal_clamp'])}, thickness: {'none' if provenance['thickness'] is None else _fmt(provenance['thickness'])}, "
              f"median of {provenance['repeats']} run(s), seed {provenance['seed']}. "
              f"Errors are against each reference (`<reference>_<metric>`); the decomposition "
              f"columns split the error into sampling + screen space + model.", "",
              "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for row in rows:
         lines.append("| " + " | ".join(_fmt(row.get(c)) for c in cols) + " |")
-    lines += ["", f"Machine: {provenance['machine']}.", ""]
+    mach = provenance["machine"]
+    lines += ["", "Machine: " + ", ".join(f"{k} {v}" for k, v in mach.items()) + ".", ""]
     return "\n".join(lines)
 
 
@@ -502,12 +503,15 @@ _RADIUS_MARKERS = "os^Dv<>"
 
 def _tradeoff(path, rows, provenance):
     refs = [r for r in provenance["references"]]
-    fig = _figure(10, 3.2 * len(refs) + 0.6)
-    axes = fig.subplots(len(refs), 2, squeeze=False)
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    costs = (("seconds", "median seconds per frame"), ("taps_per_pixel", "depth taps per pixel"),
+             ("texels_per_pixel", "depth texels read per pixel"))
+    fig = _figure(4.2 * len(costs), 3.2 * len(refs) + 0.6)
+    axes = fig.subplots(len(refs), len(costs), squeeze=False)
     radii = sorted({row["radius"] for row in rows})
     for i, ref in enumerate(refs):
-        for j, (cost, label) in enumerate((("seconds", "median seconds per frame"),
-                                           ("texels_per_pixel", "depth texels read per pixel"))):
+        for j, (cost, label) in enumerate(costs):
             ax = axes[i, j]
             x = np.array([row[cost] for row in rows], float)
             y = np.array([row[f"{ref}_rmse"] for row in rows], float)
@@ -528,6 +532,8 @@ def _tradeoff(path, rows, provenance):
                         label="Pareto front")
                 ax.scatter(x[front], y[front], s=90, facecolors="none", edgecolors="k", zorder=3)
             ax.set_xscale("log")
+            ax.xaxis.set_minor_locator(LogLocator(subs="auto"))
+            ax.xaxis.set_minor_formatter(NullFormatter())  # unlabelled minor ticks never overlap
             ax.set_xlabel(label)
             ax.set_ylabel(f"RMSE vs {ref}")
             ax.grid(alpha=0.3)
@@ -561,6 +567,6 @@ def _gallery(path, rows, refs, images, gb, primary):
         axes[r, c].set_title(label, fontsize=8)
         lim = max(float(np.nanmax(np.abs(diff))) if np.isfinite(diff).any() else 0.0, 1e-6)
         axes[r, c + 1].imshow(np.ma.masked_where(bg, diff), cmap="RdBu_r", vmin=-lim, vmax=lim)
-        axes[r, c + 1].set_title(f"- {primary}: RMSE {rmse:.3f}", fontsize=8)
+        axes[r, c + 1].set_title(f"error vs {primary}: RMSE {rmse:.3f}", fontsize=8)
     fig.suptitle(f"R = {radius:.3g}: estimates and their error maps (red: too open)")
     return _save(fig, path)
