@@ -65,8 +65,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._validate import as_rng, check_choice, check_int
-from .estimate import Estimate
+from .._validate import as_rng, check_choice, check_int
+from ..estimate import Estimate
 
 __all__ = [
     "SamplePattern",
@@ -137,7 +137,7 @@ FAMILIES = ("mixed", "cap", "crease")
 #: Where the precomputed tables live: ``data/patterns/`` at the root of the repository. The
 #: package is installed editable, so the repository root is the parent of the package folder;
 #: when the folder does not exist (a plain install), every pattern is generated on first use.
-TABLE_DIR = Path(__file__).resolve().parent.parent / "data" / "patterns"
+TABLE_DIR = Path(__file__).resolve().parents[2] / "data" / "patterns"
 #: Pattern counts of the tables (n = 1..N), per dimension.
 TABLE_N = {2: 33, 3: 40}
 #: Further counts in the symmetric electrostatic and Lloyd tables (the candidates of the
@@ -1331,7 +1331,7 @@ def _build_one(task):
 
 
 def _write_table(path: Path, dim: int, method: str, variant: str, seed: int, entries: dict) -> Path:
-    from . import _io
+    from .. import _io
 
     counts = sorted(entries)
     offsets = np.concatenate([[0], np.cumsum([len(entries[n][0]) for n in counts])])
@@ -1454,10 +1454,3 @@ def main(argv=None) -> int:
     print(f"{len(paths)} tables in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
 
-
-if __name__ == "__main__":
-    # run the canonical module (not this __main__ copy), so that worker processes and caches
-    # see one vobscure.patterns
-    from vobscure.patterns import main as _main
-
-    sys.exit(_main())
