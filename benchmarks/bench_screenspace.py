@@ -35,7 +35,9 @@ Per configuration:
   ``prepare``'s result (and the mip-map's arrays) are replaced by a view that counts what
   integer-array indexing and ``take`` return (once per configuration, on a 128^2 render:
   the count per pixel does not depend on the size). A bilinear fetch reads 4 texels (plus one
-  nearest read for the background fallback); the mip lookup reads taps/px texels x 3 channels.
+  nearest read for the background fallback); the mip lookup reads taps/px texels x the
+  channels the mip-map stores (3 unclamped: coverage, mean, central moment; 10 clamped, with
+  the pixel positions and their moments).
 - **floor s** and **x floor**: the NumPy "gather floor" for ``taps/px`` taps and the
   estimator's median time over it. The floor is :func:`gather_floor`: for each of the T taps,
   continuous pixel coordinates of every valid pixel (centre + offset x radius_px), floored
@@ -287,16 +289,31 @@ def counting_reads():
     except Exception:  # noqa: BLE001 - area sampling absent
         pyramid = None
     if pyramid is not None:
-        original_init = pyramid.__init__
+        # the pyramid's channels: self.c and the lists self.m, self.v (built by _build, which
+        # both __init__ and from_depth call)
+        original_build = pyramid._build
 
-        def init(self, *args, **kwargs):
-            original_init(self, *args, **kwargs)
+        def build(self, *args, **kwargs):
+            original_build(self, *args, **kwargs)
             for name, value in list(vars(self).items()):
                 if isinstance(value, np.ndarray) and value.dtype.kind == "f":
                     setattr(self, name, _count(value))
+                elif isinstance(value, list) and value and all(isinstance(x, np.ndarray) for x in value):
+                    setattr(self, name, [_count(x) if x.dtype.kind == "f" else x for x in value])
 
-        pyramid.__init__ = init
-        patched.append((pyramid, "__init__", original_init))
+        pyramid._build = build
+        patched.append((pyramid, "_build", original_build))
+    padded = getattr(C, "PaddedDepth", None)
+    if padded is not None:
+        # vo_line's snapped taps read a bordered copy of the depth buffer (PaddedDepth.flat)
+        original_padded = padded.__init__
+
+        def padded_init(self, *args, **kwargs):
+            original_padded(self, *args, **kwargs)
+            self.flat = _count(self.flat)
+
+        padded.__init__ = padded_init
+        patched.append((padded, "__init__", original_padded))
     try:
         yield
     finally:

@@ -18,7 +18,7 @@ when a sample lands on them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -37,12 +37,12 @@ NOISE_SIZE = 4
 class Pixels:
     """The valid pixels of a G-buffer (or a chunk of them), flattened: what estimators loop over.
 
-    ``center`` and ``n`` are computed on first use: an estimator that does not need them
-    (line sampling without the normal, say) never pays for them.
+    ``p``, ``center`` and ``n`` are computed on first use: an estimator that does not need
+    them (line sampling without the normal, say) never pays for them.
     """
 
     index: np.ndarray        # (k,) flat indices into the (H, W) image
-    p: np.ndarray            # (k, 3) view-space positions
+    z: np.ndarray            # (k,) view-space depth
     radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels
     depth: np.ndarray        # (H, W) float64 view of the depth buffer (NaN -> +inf)
     shape: tuple
@@ -52,6 +52,21 @@ class Pixels:
     perspective: bool
     focal: float | None      # pixels per unit at depth 1 (perspective) or per unit (ortho)
     normal_image: np.ndarray = field(repr=False, default=None)   # (H * W, 3) view-space normals
+
+    @cached_property
+    def p(self) -> np.ndarray:
+        """(k, 3) view-space positions (stored column by column, see :attr:`n`)."""
+        H, W = self.shape
+        p = np.empty((3, len(self.index))).T
+        if self.perspective:
+            zf = self.z / self.focal
+            np.multiply(self.col + (0.5 - W / 2.0), zf, out=p[:, 0])
+            np.multiply((H / 2.0 - 0.5) - self.row, zf, out=p[:, 1])
+        else:
+            p[:, 0] = (self.col + (0.5 - W / 2.0)) / self.focal
+            p[:, 1] = ((H / 2.0 - 0.5) - self.row) / self.focal
+        p[:, 2] = self.z
+        return p
 
     @cached_property
     def center(self) -> np.ndarray:
@@ -111,19 +126,13 @@ def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
     H, W = gb.depth.shape
     i, j = np.divmod(index, W)
     z = depth64[index]
-    p = np.empty((3, len(index))).T      # contiguous columns (see Pixels.n)
     if cam.is_perspective:
         f = cam.focal_length_px
-        p[:, 0] = (j + 0.5 - W / 2.0) * (z / f)
-        p[:, 1] = (H / 2.0 - (i + 0.5)) * (z / f)
         radius_px = (radius * f) / z
     else:
         f = H / cam.ortho_height
-        p[:, 0] = (j + 0.5 - W / 2.0) / f
-        p[:, 1] = (H / 2.0 - (i + 0.5)) / f
         radius_px = np.full(len(index), radius * f)
-    p[:, 2] = z
-    return Pixels(index=index, p=p, radius_px=radius_px, depth=depth64.reshape(H, W), shape=(H, W),
+    return Pixels(index=index, z=z, radius_px=radius_px, depth=depth64.reshape(H, W), shape=(H, W),
                   row=i, col=j, depth_flat=depth64, perspective=cam.is_perspective, focal=float(f),
                   normal_image=gb.normal.reshape(-1, 3))
 
@@ -151,7 +160,18 @@ def as_pattern(samples, dim: int, name: str = "samples") -> SamplePattern:
             raise ValueError(f"{name} must be a {kind} pattern, got points of shape {samples.points.shape}")
         return samples
     n = check_int(samples, name)
-    return disk(n) if dim == 2 else ball(n)
+    return _default_pattern(n, dim)
+
+
+@lru_cache(maxsize=128)
+def _default_pattern(n: int, dim: int) -> SamplePattern:
+    """The estimators' default pattern for a count, built once per process (``disk(n)``
+    copies its table entry and provenance on every call: milliseconds, as much as a
+    small image's estimate). Its arrays are made read-only: it is shared."""
+    p = disk(n) if dim == 2 else ball(n)
+    p.points.flags.writeable = False
+    p.weights.flags.writeable = False
+    return p
 
 
 def check_common(*, fetch="nearest", offscreen="clamp", falloff="constant", thickness=None,
@@ -426,9 +446,10 @@ def tangent_plane_coefficients(px: Pixels) -> tuple[np.ndarray, np.ndarray]:
     nn = np.take(px.normal_image, px.index, axis=0).astype(np.float64, copy=False)
     nx, ny, nz = nn[:, 0], nn[:, 1], nn[:, 2]
     if px.perspective:
-        # n . p / z_p, with p / z_p = (x / z, y / z, 1) the pixel's ray
-        p = px.p
-        den = (nx * p[:, 0] + ny * p[:, 1]) / p[:, 2] + nz
+        # n . p / z_p, with p / z_p = (x / z, y / z, 1) the pixel's ray: x / z and y / z
+        # from the pixel's column and row (Pixels.p), without the positions themselves
+        H, W = px.shape
+        den = (nx * ((px.col + (0.5 - W / 2.0)) / px.focal) + ny * (((H / 2.0 - 0.5) - px.row) / px.focal)) + nz
     else:
         den = nz.copy()
     length = np.sqrt(nx * nx + ny * ny + nz * nz)

@@ -154,7 +154,7 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     """
     k = len(px.index)
     r = px.radius_px
-    z = px.p[:, 2]
+    z = px.z
     base = C.padded_base(px, padded) if padded is not None else None
     dj, e, t, d = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
     num = np.zeros(k)
@@ -195,14 +195,12 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 np.multiply(gx, dj, out=t)
                 np.multiply(gy, e, out=dj)
                 t += dj
-                np.minimum(t, z_s, out=t)          # hi: the segment is [-z_s, hi]
-                np.maximum(t, -z_s, out=t)
+                np.clip(t, -z_s, z_s, out=t)       # hi: the segment is [-z_s, hi]
             if simple:
                 k_s = 0.5 * w / z_s                # footnote 5: weight w over the chord 2 z_s
                 if normal_clamp:
                     # Sec. 4.1 and 4.4: unoccupied = clip(d_r, -z_s, hi) + z_s, total = hi + z_s
-                    np.minimum(d, t, out=d)
-                    np.maximum(d, -z_s, out=d)
+                    np.clip(d, -z_s, t, out=d)         # hi >= -z_s: max(min(d, hi), -z_s)
                     d *= k_s
                     num += d
                     t *= k_s
