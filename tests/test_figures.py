@@ -104,13 +104,8 @@ def test_registered_figure_quick(quick_figures, name):
     assert np.isfinite(rgb).all() and rgb.std() > 0.05, f"{name}: the figure is blank"
 
 
-#: The figures of Loos & Sloan 2010 (Fig. 5-8, Table 1): also checked for clipped labels.
-PAPER_FIGURES = ("fig5_thickness", "fig6_normals", "fig7_lines_vs_points", "fig8_dual_radii",
-                 "table1_timings")
-
-
-@pytest.mark.parametrize("name", PAPER_FIGURES)
-def test_paper_figure_nothing_cut_off_at_the_border(quick_figures, name):
+@pytest.mark.parametrize("name", _registered())
+def test_registered_figure_nothing_cut_off_at_the_border(quick_figures, name):
     import matplotlib.image as mpimg
 
     _, _, paths = quick_figures(name)

@@ -1,6 +1,6 @@
 """Why an estimator is off: its error split into sampling, screen-space and model error.
 
-One PNG, ``error_decomposition.png``, from :func:`vobscure.experiments.compare.compare` on the
+One PNG, ``error_decomposition.png``, and its numbers, ``error_decomposition.csv``, from :func:`vobscure.experiments.compare.compare` on the
 Cornell box and the blob, for lines 5 and 9, points 12 and 33 and one area sample, with the
 normal (``normal_clamp=True``: half-ball VO, which reads 1 on an open flat surface as AO does;
 unclamped ball VO reads 0.5 there and its model term would be mostly that constant):
@@ -14,7 +14,9 @@ unclamped ball VO reads 0.5 there and its model term would be mostly that consta
 
 Regenerate with::
 
-    vobscure figures error_decomposition --out docs/img
+    python -m vobscure.experiments.figures.error_decomposition --out docs/img
+
+which also prints the table of ``docs/figures.md``.
 """
 
 from __future__ import annotations
@@ -23,10 +25,19 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "FILENAME"]
+__all__ = ["make", "measure", "markdown", "main", "FILENAME", "CSV_FILENAME", "CSV_RANGES"]
 
-#: Name of the one file :func:`make` writes.
+#: Name of the PNG :func:`make` writes.
 FILENAME = "error_decomposition.png"
+#: Name of the CSV of the plotted numbers.
+CSV_FILENAME = "error_decomposition.csv"
+_TERMS4 = ("sampling", "screen", "model", "total")
+#: Range of each numeric CSV column (the tests check every row against it).
+CSV_RANGES = {"samples": (1, 256), "taps_per_pixel": (1, 256), "seconds": (0.0, 1e4),
+              **{f"{t}_error_bias": (-1.0, 1.0) for t in _TERMS4},
+              **{f"{t}_error_rmse": (0.0, 1.0) for t in _TERMS4}}
+_COLUMNS = ("scene", "method", "samples", "taps_per_pixel", "seconds",
+            *[f"{t}_error_{m}" for t in _TERMS4 for m in ("bias", "rmse")])
 METHODS = "line:5,line:9,point:12,point:33,area:1"
 SCENES = ("cornell_box", "blob")
 TERMS = (("sampling", "#1f77b4"), ("screen", "#ff7f0e"), ("model", "#2ca02c"))
@@ -70,14 +81,10 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False) -> list[Pa
     >>> FILENAME
     'error_decomposition.png'
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from ..._io import atomic_write
+    from . import _common
 
     rows = measure(quick, seed=seed, cache=cache)
-    fig = Figure(figsize=(12, 4.2 * len(SCENES)), dpi=100, layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = _common.new_figure(12, 4.2 * len(SCENES) + 0.4)
     axes = fig.subplots(len(SCENES), 2, squeeze=False)
     for i, scene in enumerate(SCENES):
         sel = [r for r in rows if r["scene"] == scene]
@@ -107,8 +114,41 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False) -> list[Pa
         ax.set_ylabel("RMSE")
         ax.set_title(f"{scene}: RMSE by step")
         ax.legend(fontsize=8)
-    fig.suptitle("Half-ball VO, error decomposition: sampling (estimate - screen-space VO), screen space "
-                 "(screen-space - world-space VO), model (world-space VO - AO)")
-    path = Path(out_dir) / FILENAME
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png"))
-    return [path]
+    fig.suptitle("Half-ball VO, error decomposition: sampling (estimate - screen-space VO),\n"
+                 "screen space (screen-space VO - world-space VO), model (world-space VO - AO)")
+    out = Path(out_dir)
+    return [_common.save_figure(fig, out / FILENAME),
+            _common.write_csv(out / CSV_FILENAME, rows, _COLUMNS)]
+
+
+def markdown(rows) -> str:
+    """The rows as the markdown table of ``docs/figures.md`` (bias and RMSE of each step)."""
+    head = "| scene | configuration | " + " | ".join(f"{t} bias | {t} RMSE" for t in _TERMS4) + " |"
+    lines = [head, "|---|---|" + "---:|" * (2 * len(_TERMS4))]
+    for r in rows:
+        cells = " | ".join(f"{float(r[f'{t}_error_bias']):+.4f} | {float(r[f'{t}_error_rmse']):.4f}"
+                           for t in _TERMS4)
+        lines.append(f"| {r['scene']} | {r['method']} {r['samples']} | {cells} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    """``python -m vobscure.experiments.figures.error_decomposition [--quick] [--out DIR]``."""
+    import argparse
+    import csv
+
+    ap = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.error_decomposition")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--out", default=".")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    paths = make(args.out, quick=args.quick, seed=args.seed)
+    with open(paths[1], newline="") as fh:
+        print(markdown(list(csv.DictReader(fh))))
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

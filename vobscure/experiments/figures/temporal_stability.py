@@ -1,7 +1,7 @@
 """Temporal stability: do line samples flicker less than point samples in animation?
 
 Loos & Sloan 2010 (Sec. 5.1) report that line sampling aliases much less than point sampling
-when the camera moves. One PNG, ``temporal_stability.png``: over a camera orbit (10 degrees,
+when the camera moves. One PNG, ``temporal_stability.png``, and its numbers, ``temporal_stability.csv``: over a camera orbit (10 degrees,
 ``frames`` frames) of the Cornell box and the blob, the flicker of lines 5 and 9, points 12
 and 33 and one area sample (:func:`vobscure.metrics.flicker`: the mean absolute
 frame-to-frame change of the estimate minus that of the converged screen-space VO over the
@@ -13,7 +13,10 @@ negative (with ``quick``, 256 reference samples, this dominates; the full figure
 
 Regenerate with::
 
-    vobscure figures temporal_stability --out docs/img
+    python -m vobscure.experiments.figures.temporal_stability --out docs/img
+
+which also prints the table of ``docs/figures.md`` (``vobscure figures temporal_stability``
+draws the same files without the table).
 """
 
 from __future__ import annotations
@@ -22,10 +25,18 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "FILENAME"]
+__all__ = ["make", "measure", "markdown", "main", "FILENAME", "CSV_FILENAME", "CSV_RANGES"]
 
-#: Name of the one file :func:`make` writes.
+#: Name of the PNG :func:`make` writes.
 FILENAME = "temporal_stability.png"
+#: Name of the CSV of the plotted numbers.
+CSV_FILENAME = "temporal_stability.csv"
+#: Range of each numeric CSV column (the tests check every row against it). Flicker is a
+#: difference of two mean absolute changes, so it may be slightly negative.
+CSV_RANGES = {"samples": (1, 256), "frames": (2, 1000), "taps_per_pixel": (1, 256),
+              "flicker": (-1.0, 1.0), "flicker_raw": (0.0, 1.0), "screen_rmse": (0.0, 1.0)}
+_COLUMNS = ("scene", "method", "samples", "frames", "taps_per_pixel", "flicker", "flicker_raw",
+            "screen_rmse")
 METHODS = "line:5,line:9,point:12,point:33,area:1"
 SCENES = ("cornell_box", "blob")
 _COLORS = {"line": "#1f77b4", "point": "#d62728", "area": "#2ca02c"}
@@ -64,14 +75,10 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
     >>> FILENAME
     'temporal_stability.png'
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from ..._io import atomic_write
+    from . import _common
 
     rows = measure(quick, seed=seed)
-    fig = Figure(figsize=(12, 4.0 * len(SCENES)), dpi=100, layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = _common.new_figure(12, 3.9 * len(SCENES))
     axes = fig.subplots(len(SCENES), 2, squeeze=False)
     for i, scene in enumerate(SCENES):
         sel = [r for r in rows if r["scene"] == scene]
@@ -81,13 +88,49 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
         axes[i, 0].bar(x, [r["flicker"] for r in sel], color=colors)
         axes[i, 0].axhline(0, color="k", lw=0.6)
         axes[i, 0].set_xticks(x, labels)
-        axes[i, 0].set_ylabel("flicker (mean |frame change|, minus the reference's)")
+        axes[i, 0].set_ylabel("flicker\n(mean |change| - reference's)")
         axes[i, 0].set_title(f"{scene}: flicker over {sel[0]['frames']} frames")
         axes[i, 1].bar(x, [r["screen_rmse"] for r in sel], color=colors)
         axes[i, 1].set_xticks(x, labels)
-        axes[i, 1].set_ylabel("RMSE vs converged screen-space VO")
-        axes[i, 1].set_title(f"{scene}: per-frame error (last frame)")
+        axes[i, 1].set_ylabel("RMSE vs screen-space VO")
+        axes[i, 1].set_title(f"{scene}: error of one frame")
     fig.suptitle("Temporal stability over a 10-degree camera orbit (Loos & Sloan 2010, Sec. 5.1)")
-    path = Path(out_dir) / FILENAME
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png"))
-    return [path]
+    out = Path(out_dir)
+    return [_common.save_figure(fig, out / FILENAME),
+            _common.write_csv(out / CSV_FILENAME, rows, _COLUMNS)]
+
+
+def markdown(rows) -> str:
+    """The rows as the markdown table of ``docs/figures.md``."""
+    lines = ["| scene | configuration | taps/px | flicker | raw frame change | RMSE (one frame) |",
+             "|---|---|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['scene']} | {r['method']} {r['samples']} | {r['taps_per_pixel']} | "
+                     f"{r['flicker']:.4f} | {r['flicker_raw']:.4f} | {r['screen_rmse']:.4f} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    """``python -m vobscure.experiments.figures.temporal_stability [--quick] [--out DIR]``."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.temporal_stability")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--out", default=".")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    paths = make(args.out, quick=args.quick, seed=args.seed)
+    import csv
+
+    with open(paths[1], newline="") as fh:
+        rows = [dict(r, samples=int(r["samples"]), taps_per_pixel=int(r["taps_per_pixel"]),
+                     flicker=float(r["flicker"]), flicker_raw=float(r["flicker_raw"]),
+                     screen_rmse=float(r["screen_rmse"])) for r in csv.DictReader(fh)]
+    print(markdown(rows))
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
