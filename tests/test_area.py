@@ -195,12 +195,13 @@ def plane_gbuffers():
             for name, kw in PLANE_CAMERAS.items()}
 
 
-def _interior(gb, radius, n, reconstruction="bspline"):
+def _interior(gb, radius, n, reconstruction="bspline", lod_bias=None):
     """Pixels whose disk (plus a pixel) and the filter's support at the coarsest level used
     lie inside the image, on mip levels that need no padding."""
     H, W = gb.shape
     r_px = radius * np.asarray(gb.camera.pixels_per_unit(gb.depth), dtype=float)
-    lod = np.log2(r_px) + 0.5 * np.log2(region_areas(disk(n)).max()) - area.LOD_BIAS[reconstruction]
+    bias = area.LOD_BIAS[reconstruction] if lod_bias is None else lod_bias
+    lod = np.log2(r_px) + 0.5 * np.log2(region_areas(disk(n)).max()) - bias
     L1 = np.floor(np.maximum(lod, 0.0)) + 1
     margin = r_px + 1.0 + 1.5 * 2.0 ** L1
     i, j = np.mgrid[:H, :W]
@@ -484,6 +485,8 @@ def test_offscreen_policies(crease_ortho):
     (dict(offscreen="wrap"), "offscreen"),
     (dict(reconstruction="bicubic"), "reconstruction"),
     (dict(noise_size=0), "noise_size"),
+    (dict(lod_bias=float("nan")), "lod_bias"),
+    (dict(lod_bias="fine"), "lod_bias"),
 ])
 def test_bad_arguments(crease_ortho, kwargs, name):
     kw = dict(radius=0.3)
@@ -527,3 +530,21 @@ def test_pyramid_slope_lookup_matches_a_pixel_mixture():
         assert cov[0] == pytest.approx(weights.sum(), rel=1e-12)
         assert mean[0] == pytest.approx(expect_mean, rel=1e-12)
         assert var[0] == pytest.approx(expect_var, rel=1e-9)
+
+
+@pytest.mark.parametrize("lod_bias", [0.0, 1.5, 2.5])
+@pytest.mark.parametrize("normal_clamp", [False, True])
+def test_lod_bias_keeps_planes_exact_and_changes_the_level(plane_gbuffers, crease_ortho, lod_bias, normal_clamp):
+    """Any level of detail keeps a plane exact (the B-spline's spread is the same at every
+    level); on the crease the level matters, and the default is LOD_BIAS."""
+    gb = plane_gbuffers[next(iter(PLANE_CAMERAS))]
+    radius = 0.3
+    inside = _interior(gb, radius, 9, lod_bias=lod_bias)
+    assert inside.sum() > 100
+    v = vo_area(gb, radius=radius, samples=9, normal_clamp=normal_clamp, lod_bias=lod_bias)
+    np.testing.assert_allclose(v[inside], 1.0 if normal_clamp else 0.5, rtol=0, atol=PLANE_TOL)
+    default = vo_area(crease_ortho, radius=1.0, samples=1, normal_clamp=normal_clamp)
+    same = vo_area(crease_ortho, radius=1.0, samples=1, normal_clamp=normal_clamp, lod_bias=area.LOD_BIAS["bspline"])
+    other = vo_area(crease_ortho, radius=1.0, samples=1, normal_clamp=normal_clamp, lod_bias=lod_bias)
+    np.testing.assert_array_equal(default, same)
+    assert np.nanmax(np.abs(other - default)) > 1e-3

@@ -483,8 +483,8 @@ def _reduce(c, m, v, offscreen):
 
 def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", model: str = "box", reconstruction: str = "bspline",
-            prefilter: bool = False, randomize: bool = True, seed=0, offscreen: str = "clamp",
-            noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+            prefilter: bool = False, lod_bias=None, randomize: bool = True, seed=0,
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
     """Volumetric Obscurance by area sampling (Loos & Sloan 2010, Sec. 4.2).
 
     Each disk sample (x, y) of the pattern stands for its Voronoi region of the unit disk,
@@ -527,6 +527,13 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     prefilter : bool
         Gaussian blur (sigma = ``PREFILTER_SIGMA`` px, coverage-weighted) of the finest
         level before the mip chain, against reconstruction artifacts (Sec. 4.2).
+    lod_bias : float, optional
+        Levels subtracted from log2 of a region's footprint side when choosing the mip
+        level; default ``LOD_BIAS[reconstruction]`` (1 for the B-spline: its footprint then
+        has the region's second moments; 0 for the trilinear tent, the paper's rule).
+        Larger is finer. Planes stay exact whatever the value; elsewhere the best value
+        depends on the scene (``docs/screenspace.md``, "Level of detail": 1.5 halves the
+        one-sample error on the Cornell box but doubles it on the orthographic crease).
     randomize : bool
         Reflect the pattern about a random 2-D direction per pixel (Sec. 4.5).
     seed : int, Generator or None
@@ -632,6 +639,12 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     pattern = C.as_pattern(samples, 2)
     check_choice(model, "model", MODELS)
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
+    if lod_bias is None:
+        lod_bias = LOD_BIAS[reconstruction]
+    elif isinstance(lod_bias, bool) or not isinstance(lod_bias, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(lod_bias):
+        raise ValueError(f"lod_bias must be a finite number (levels), got {lod_bias!r}")
+    lod_bias = float(lod_bias)
     thickness = C.check_common(offscreen=offscreen, falloff=falloff, thickness=thickness, noise_size=noise_size)
     dtype = C.out_dtype(gbuffer)
     H, W = gb.depth.shape
@@ -648,14 +661,15 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     texture = C.noise_texture(noise_size, seed, 2, randomize)
     kernel = partial(_area_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
                      thickness=thickness, falloff=falloff, model=model, reconstruction=reconstruction,
-                     offscreen=offscreen, pyramid=pyramid, half_log_area=half_log_area, texture=texture)
+                     lod_bias=lod_bias, offscreen=offscreen, pyramid=pyramid, half_log_area=half_log_area,
+                     texture=texture)
     # smaller chunks than the other estimators: a lookup holds 2 levels x 3 x 3 texels of
     # moments per pixel (measured at 512^2: 75 B/px peak with 8192 pixels, 101 with 16384)
     return C.run_chunks(gb, radius, kernel, dtype, prepared=(gb, depth64, index), chunk=AREA_CHUNK_PIXELS)
 
 
 def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model, reconstruction,
-                 offscreen, pyramid, half_log_area, texture):
+                 lod_bias, offscreen, pyramid, half_log_area, texture):
     """Area-sampled VO of one chunk of pixels (see :func:`vo_area`)."""
     k = len(px.index)
     z_p = px.p[:, 2]
@@ -700,7 +714,7 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
         x, y, xy = C.disk_pixels(px, C.reflect(s, noise, k), snap=False)
         z_s = np.sqrt(np.maximum(0.0, 1.0 - np.einsum("ij,ij->i", xy, xy)))
         # lod = log2 of the footprint's side: log2(R_px) + log2(a_i) / 2
-        lod = np.clip(log_r + hla - LOD_BIAS[reconstruction], 0.0, pyramid.top)
+        lod = np.clip(log_r + hla - lod_bias, 0.0, pyramid.top)
         # Step 3: the filtered moments at the region's centre; clamped, of the depth
         # carried along the tangent plane to this line (see ``slope`` above)
         # accumulated about the pixel's own q (carried along the tangent plane when clamped)
