@@ -39,6 +39,17 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
     num = np.zeros(k)
     den = np.zeros(k)
     for s, w in zip(pattern.points, pattern.weights):
+        if not np.any(s):
+            # A sample at the ball's centre lies on the surface itself: the depth buffer
+            # cannot tell which side it is on (the test z > d compares a depth with itself
+            # up to rounding and filtering), and every point-symmetric pattern of odd n has
+            # one. Its Voronoi region is a small ball around p, which the tangent plane
+            # bisects: it counts half open for the ball and open for the half-ball (Sec.
+            # 4.4), its expectation on a locally flat surface. Counted as a test instead,
+            # it biased a plane by + w / 2 (0.530 for the 13-point default, 0.518 for 33).
+            num += w * (1.0 if normal_clamp else 0.5)
+            den += w
+            continue
         # Sec. 4.5: a random 3-D (Householder) reflection per pixel: s - 2 (s . v) v
         if vc is None:
             o = [np.full(k, s[a]) for a in range(3)]
@@ -75,7 +86,11 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
 
     Each 3-D sample X = p + R s of the ball pattern is projected to the screen and is
     occupied when it lies behind the depth buffer there (within ``thickness`` behind it
-    when given). Visibility is the weighted unoccupied fraction.
+    when given). Visibility is the weighted unoccupied fraction. A sample at the centre
+    (s = 0, in every symmetric pattern of odd n) lies on the surface, where the depth test
+    is undecidable; it counts half open (open with ``normal_clamp``), its expectation on a
+    locally flat surface. With point-symmetric patterns a plane then reads 1/2 (1 clamped)
+    up to the depth buffer's quantization.
 
     Parameters
     ----------
