@@ -69,13 +69,18 @@ class Method:
 
     @property
     def taps(self) -> int:
-        """Depth-buffer taps (fetches) per pixel: one per sample."""
+        """Depth-buffer taps (fetches) per pixel: one per sample, except the centre of an
+        odd point pattern, which ``vo_point`` does not tap (it lies on the surface)."""
+        if self.name == "point":
+            from ..patterns import ball
+
+            return self.samples - int(ball(self.samples).has_center)
         return self.samples
 
     @property
     def texels(self) -> int:
         """Depth-buffer texels read per pixel: taps x texels per tap."""
-        return TEXELS_PER_SAMPLE[self.name] * self.samples
+        return TEXELS_PER_SAMPLE[self.name] * self.taps
 
     def run(self, gbuffer, *, radius, normal_clamp, thickness, seed):
         from .. import screenspace
