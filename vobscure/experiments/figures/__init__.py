@@ -6,19 +6,20 @@ canvas (never ``pyplot``, never a display) and written atomically.
 
 :data:`FIGURES` maps each figure's name to its module; :func:`make_all` runs some or all of
 them (``vobscure figures`` is built on it). The figures of Loos & Sloan 2010 are
-``fig5_thickness``, ``fig6_normals``, ``fig7_lines_vs_points``, ``fig8_dual_radii`` and
-``table1_timings``; ``docs/figures.md`` shows each with what it confirms.
+``fig4_noise``, ``fig5_thickness``, ``fig6_normals``, ``fig7_lines_vs_points``,
+``fig8_dual_radii`` and ``table1_timings``; ``docs/figures.md`` shows each with what it
+confirms. ``patterns_quality`` is the analytic sample-pattern measure of Sec. 4.5
+(``docs/patterns_results.md``).
 """
 
 from __future__ import annotations
 
 import importlib
-import importlib.util
 from pathlib import Path
 
-__all__ = ["FIGURES", "make_all", "conventions", "screenspace_claims", "fig5_thickness",
+__all__ = ["FIGURES", "make_all", "conventions", "screenspace_claims", "fig4_noise", "fig5_thickness",
            "fig6_normals", "fig7_lines_vs_points", "fig8_dual_radii", "table1_timings",
-           "error_decomposition", "temporal_stability"]
+           "error_decomposition", "temporal_stability", "patterns_quality"]
 
 #: Figure name -> module name in this package, in the order :func:`make_all` runs them.
 #: Figures 5-7 share the measurements of :func:`vobscure.experiments.claims.measurement`
@@ -26,6 +27,7 @@ __all__ = ["FIGURES", "make_all", "conventions", "screenspace_claims", "fig5_thi
 FIGURES = {
     "conventions": "conventions",
     "screenspace_claims": "screenspace_claims",
+    "fig4_noise": "fig4_noise",
     "fig5_thickness": "fig5_thickness",
     "fig6_normals": "fig6_normals",
     "fig7_lines_vs_points": "fig7_lines_vs_points",
@@ -33,11 +35,8 @@ FIGURES = {
     "table1_timings": "table1_timings",
     "error_decomposition": "error_decomposition",
     "temporal_stability": "temporal_stability",
+    "patterns_quality": "patterns_quality",
 }
-# Fig. 4 (noise against the sample count) lives in its own module when present.
-if importlib.util.find_spec(f"{__name__}.patterns_quality") is not None:
-    FIGURES["patterns_quality"] = "patterns_quality"
-    __all__.append("patterns_quality")
 
 
 def make_all(out_dir, quick: bool = False, names=None, *, progress: bool = True) -> list[Path]:
