@@ -122,7 +122,11 @@ class Config:
 
     @property
     def taps(self) -> int:
-        """Depth-buffer taps per pixel (DESIGN.md's cost model), see the module docstring."""
+        """Depth-buffer taps per pixel (DESIGN.md's cost model), see the module docstring.
+        ``vo_point`` does not tap the centre of an odd (point-symmetric) pattern: it lies on
+        the surface and counts half open without a fetch."""
+        if self.kind == "point":
+            return self.samples - int(vo.patterns.ball(self.samples).has_center)
         return self.samples * self.taps_per_sample
 
 
