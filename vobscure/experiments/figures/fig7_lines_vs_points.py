@@ -21,7 +21,8 @@ those of :func:`vobscure.experiments.claims.measurement` (shared with Fig. 5, Fi
     paper's "better quality in less time".
 
 Times are NumPy on this machine's CPU (median of 3 runs after a warm-up, round-robin); the
-machine-independent cost, depth taps per pixel (= samples), is in the CSV beside them.
+machine-independent cost, depth taps per pixel (= samples, less the centre of an odd point
+pattern, which ``vo_point`` does not tap), is in the CSV beside them.
 :mod:`~vobscure.experiments.figures.screenspace_claims` draws the four Table 1
 configurations against the ground truth and against taps; ``docs/results.md`` has the full
 tables.
@@ -64,6 +65,16 @@ CSV_RANGES = {"samples": (1, 256), "normal_clamp": (0, 1), "taps_per_pixel": (1,
 _COLUMNS = ("scene", "method", "samples", "normal_clamp", "taps_per_pixel", "ms", "rmse_ref",
             "rmse_ref_blurred", "bias_ref", "rmse_gt")
 _COLORS = {"line": "#1f77b4", "point": "#d62728"}
+
+
+def _taps(method: str, n: int) -> int:
+    """Depth taps per pixel: one per sample, but vo_point does not tap the centre of an odd
+    (point-symmetric) pattern, which lies on the surface."""
+    if method == "point":
+        from ...patterns import ball
+
+        return n - int(ball(n).has_center)
+    return n
 _NAMES = {"cornell_box": "Cornell box", "blob": "blob"}
 
 
@@ -142,7 +153,7 @@ def _sweep(data, quick, seed):
                 b = vo.bilateral_blur(v, m.gb)
                 e_ref = vo.error(v, ref)
                 rows.append({"scene": scene, "method": method, "samples": n, "normal_clamp": nc,
-                             "taps_per_pixel": n, "ms": 1000.0 * seconds[(method, n)],
+                             "taps_per_pixel": _taps(method, n), "ms": 1000.0 * seconds[(method, n)],
                              "rmse_ref": e_ref.rmse, "rmse_ref_blurred": vo.error(b, ref).rmse,
                              "bias_ref": e_ref.bias, "rmse_gt": vo.error(v, truth).rmse})
                 if scene == "cornell_box" and nc and any(n in p for p in PAIRS):
@@ -222,5 +233,5 @@ def _curves(subfig, rows, scenes):
                Line2D([], [], ls="", marker="o", ms=10, mfc="none", mec="0.3", mew=1.6,
                       label="claim pairs: lines 5 / points 12, lines 9 / points 33"),
                Line2D([], [], ls="", marker="$n$", color="0.3",
-                      label="n = samples (= depth taps per pixel)")]
+                      label="n = samples (= depth taps per pixel,\nless an odd point pattern's centre)")]
     subfig.legend(handles=handles, loc="outside lower center", ncol=5, fontsize=9.5, frameon=False)
