@@ -150,12 +150,90 @@ def test_symmetric_patterns_are_exact_on_planes_through_the_centre():
     through = dataclasses.replace(cfg, t1=np.zeros(512), exact=np.full(512, 0.5))
     for p in (disk(9), disk(12), ball(12), ball(40), disk(7, method="sobol", seed=3)):
         np.testing.assert_allclose(P._estimates(p, through), 0.5, atol=EXACT_TOL)
-    # a point sample at the centre lies on the surface and reads open (occupied means behind
-    # the surface, as in vo_point): the pairs give 0.5, the centre its whole weight
-    odd = ball(33)
-    np.testing.assert_allclose(P._estimates(odd, through), 0.5 + 0.5 * odd.weights[0], atol=EXACT_TOL)
+    # a point sample at the centre lies on the surface and counts half open, as in vo_point
+    # (docs/screenspace.md, "The centre sample"): odd symmetric ball patterns are exact too
+    # (before the rule they read 0.5 + w_centre / 2)
+    for odd in (ball(13), ball(33), ball(13, method="sobol"), ball(33, method="lloyd")):
+        assert odd.has_center and odd.weights[0] > 0.02
+        np.testing.assert_allclose(P._estimates(odd, through), 0.5, atol=EXACT_TOL)
     plain = disk(9, method="random", symmetric=False, seed=3)
     assert np.max(np.abs(P._estimates(plain, through) - 0.5)) > 0.01
+
+
+def _crease_exact_near_centre(cfg, eps):
+    """Exact open fraction of the ball of radius eps about the centre in each crease
+    configuration: the configuration scaled by 1 / eps (t -> t / eps), by crease_volume."""
+    concave = cfg.kind == 1
+    open_cc = crease_volume(cfg.n1, cfg.t1 / eps, cfg.n2, cfg.t2 / eps) / V_BALL
+    occ_cx = crease_volume(-cfg.n1, -cfg.t1 / eps, -cfg.n2, -cfg.t2 / eps) / V_BALL
+    return np.where(concave, open_cc, 1.0 - occ_cx)
+
+
+def test_the_centre_alone_reads_one_half_on_every_crease():
+    """The centre rule (docs/screenspace.md, "The centre sample"): a sample at the origin
+    stands for a small ball about the surface point, which every crease configuration cuts in
+    half: the first plane passes through the centre, the second at |t2| > 0 from it."""
+    centre = SamplePattern([[0.0, 0.0, 0.0]], [1.0])
+    cfg = P._configurations(P.QUALITY_TRIALS, P.QUALITY_SEED, "crease")
+    assert np.all(cfg.t1 == 0.0) and set(np.unique(cfg.kind)) == {1, 2}
+    # where 1/2 is right: the second plane misses a ball of radius eps < |t2| about the
+    # centre, whose exact VO is then 1/2 (to rounding) in every configuration
+    assert np.all(np.abs(cfg.t2) > 0.0)
+    for eps in (0.5 * np.abs(cfg.t2), np.full(len(cfg.t2), 1e-9)):
+        small = np.abs(cfg.t2) > eps
+        np.testing.assert_allclose(_crease_exact_near_centre(cfg, eps)[small], 0.5, atol=EXACT_TOL)
+    assert np.all(P._estimates(centre, cfg) == 0.5)
+    # on the mixed family: 1/2 on the creases; on the caps (t1 != 0) an ordinary point test
+    mixed = P._configurations(P.QUALITY_TRIALS, P.QUALITY_SEED, "mixed")
+    est = P._estimates(centre, mixed)
+    cap = mixed.kind == 0
+    assert np.all(mixed.t1[cap] != 0.0)
+    assert np.all(est[~cap] == 0.5)
+    assert np.array_equal(est[cap], (mixed.t1[cap] >= 0.0).astype(float))     # open: 0 <= t1
+    # and the quality is that of the constant 1/2 on the creases
+    q = quality(centre, family="crease")
+    assert float(q.value) == pytest.approx(float(np.sqrt(np.mean((0.5 - cfg.exact) ** 2))), rel=EXACT_TOL)
+
+
+def _split_centre_estimates(pattern, cfg, delta=1e-9):
+    """An independent estimate for configurations with t1 == 0: ordinary depth tests, written
+    here, with the centre's weight split half/half between two samples on either side of the
+    first plane, +-delta n1 (the second plane, at |t2| >> delta, does not separate them)."""
+    w = pattern.weights
+    centre = np.all(pattern.points == 0.0, axis=1)
+    out = np.empty(len(cfg.t1))
+    for t in range(len(cfg.t1)):
+        x = pattern.points[~centre] @ cfg.rot3[t].T
+        w_t = w[~centre]
+        if np.any(centre):
+            x = np.concatenate([x, [delta * cfg.n1[t], -delta * cfg.n1[t]]])
+            w_t = np.concatenate([w_t, [0.5 * w[centre].sum(), 0.5 * w[centre].sum()]])
+        behind1, behind2 = x @ cfg.n1[t] > cfg.t1[t], x @ cfg.n2[t] > cfg.t2[t]
+        occupied = {0: behind1, 1: behind1 | behind2, 2: behind1 & behind2}[int(cfg.kind[t])]
+        out[t] = float(np.sum(w_t[~occupied]))
+    return out
+
+
+def test_odd_symmetric_ball_patterns_count_the_centre_half_open_when_the_plane_passes_through_it():
+    cfg = P._configurations(2000, 11, "crease")
+    assert np.min(np.abs(cfg.t2)) > 1e-6
+    planes = P._configurations(500, 12, "cap")
+    through = dataclasses.replace(planes, t1=np.zeros(500))
+    for p in (ball(13), ball(33), ball(9, method="spiral"), ball(21, method="random"),
+              ball(1, method="lloyd", symmetric=False), ball(12)):
+        for c in (cfg, through):
+            np.testing.assert_allclose(P._estimates(p, c), _split_centre_estimates(p, c), rtol=0,
+                                       atol=EXACT_TOL)
+    # the centre adds w0 / 2 where the first plane passes through it, and is an ordinary point
+    # test elsewhere (caps off the centre: open when 0 <= t1)
+    odd = ball(13)
+    w0 = odd.weights[0]
+    rest = SamplePattern(odd.points[1:], odd.weights[1:])
+    np.testing.assert_allclose(P._estimates(odd, cfg), (1 - w0) * P._estimates(rest, cfg) + w0 / 2,
+                               rtol=0, atol=EXACT_TOL)
+    assert np.all(planes.t1 != 0.0)
+    np.testing.assert_allclose(P._estimates(odd, planes), (1 - w0) * P._estimates(rest, planes)
+                               + w0 * (planes.t1 >= 0.0), rtol=0, atol=EXACT_TOL)
 
 
 def test_quality_is_reproducible_and_its_stderr_honest():
@@ -272,6 +350,72 @@ def test_tables_load_and_their_quality_is_reproduced(domain, method, variant):
         q = quality(table[n], trials=P.QUALITY_TRIALS, seed=P.QUALITY_SEED)
         assert rec["quality"] == pytest.approx(float(q.value), rel=EXACT_TOL, abs=EXACT_TOL)
         assert rec["quality_stderr"] == pytest.approx(float(q.stderr), rel=1e-9, abs=EXACT_TOL)
+
+
+def _provenance_of(path):
+    import json
+
+    with np.load(path, allow_pickle=False) as z:
+        return json.loads(str(z["provenance"]))
+
+
+def test_ball_tables_record_the_quality_version_of_the_centre_rule():
+    for method in P.METHODS:
+        for variant in P.VARIANTS[3]:
+            prov = _provenance_of(P._table_path(3, method, variant))
+            assert prov["quality"]["version"] == P.QUALITY_VERSION == 2, (method, variant)
+            assert "centre" in prov["quality"]["note"]
+            # the points are the generation's: its command stays, the re-evaluation is named
+            assert prov["command"] == "python -m vobscure.patterns build"
+            assert prov["quality"]["command"] == "python -m vobscure.patterns rescore --domain ball"
+
+
+def test_rescoring_keeps_points_and_weights_bit_for_bit(tmp_path):
+    import shutil
+
+    name = "ball_sobol_symmetric.npz"
+    shutil.copy(P.TABLE_DIR / name, tmp_path / name)
+    before = P.load_table("ball", "sobol", directory=tmp_path)
+    try:
+        assert P._rescore_tables(tmp_path, methods=("sobol",)) == [tmp_path / name]
+        after = P.load_table("ball", "sobol", directory=tmp_path)
+    finally:
+        P._read_table.cache_clear()
+    assert sorted(after) == sorted(before)
+    for n in before:
+        assert np.array_equal(after[n].points, before[n].points)
+        assert np.array_equal(after[n].weights, before[n].weights)
+        assert after[n].provenance["quality"] == pytest.approx(before[n].provenance["quality"], rel=EXACT_TOL)
+        assert after[n].provenance["seconds"] == before[n].provenance["seconds"]
+    old, new = _provenance_of(P.TABLE_DIR / name), _provenance_of(tmp_path / name)
+    assert new["software"] == old["software"] and new["command"] == old["command"]
+    assert new["quality"]["version"] == P.QUALITY_VERSION
+
+
+def test_a_quick_build_re_evaluates_the_entries_it_keeps_from_an_older_metric(tmp_path):
+    """Entries kept from a table whose quality was recorded by another QUALITY_VERSION get
+    the current quality (here: a planted wrong value under version 1)."""
+    import json
+
+    from vobscure import _io
+
+    src = P.TABLE_DIR / "ball_random_symmetric.npz"
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files if k != "provenance"}
+        prov = json.loads(str(z["provenance"]))
+    prov["quality"] = {k: v for k, v in prov["quality"].items() if k != "version"}
+    prov["entries"]["13"]["quality"] = 1.0
+    _io.save_npz(tmp_path / src.name, prov, **arrays)
+    try:
+        P.build_tables(tmp_path, quick=True, methods=("random",), dims=(3,), progress=False)
+        table = P.load_table("ball", "random", directory=tmp_path)
+    finally:
+        P._cached.cache_clear()
+        P._read_table.cache_clear()
+        P._best.cache_clear()
+    assert np.array_equal(table[13].points, arrays["points"][arrays["offsets"][12]:arrays["offsets"][13]])
+    assert table[13].provenance["quality"] == pytest.approx(float(quality(table[13]).value), rel=EXACT_TOL)
+    assert _provenance_of(tmp_path / src.name)["quality"]["version"] == P.QUALITY_VERSION
 
 
 REGENERATED = [

@@ -131,6 +131,17 @@ SYMMETRY_RTOL = 1e-9
 #: Default number of random configurations and seed of :func:`quality`.
 QUALITY_TRIALS = 16384
 QUALITY_SEED = 0
+#: Version of :func:`quality`, recorded with the tables' qualities. 1: a ball sample at the
+#: centre was depth-tested like any other (and read open on every crease); 2: it counts half
+#: occupied by a plane through the centre, as ``vo_point`` counts it (docs/screenspace.md,
+#: "The centre sample"). Disk qualities are the same in both; points and weights do not depend
+#: on it (:data:`GENERATOR_VERSION` does not change).
+QUALITY_VERSION = 2
+QUALITY_NOTES = {
+    1: "a ball sample at the centre depth-tested like any other",
+    2: "a ball sample at the centre counts half occupied by a plane through the centre (t1 == 0), "
+       "as vo_point counts it (docs/screenspace.md, 'The centre sample')",
+}
 #: The configuration families of :func:`quality`.
 FAMILIES = ("mixed", "cap", "crease")
 
@@ -1102,10 +1113,23 @@ def _estimates(pattern: SamplePattern, cfg: _Configurations) -> np.ndarray:
         # point sampling: the pattern turned by a random orthogonal map, each point occupied
         # or not
         x = np.einsum("tij,nj->tni", cfg.rot3, pattern.points)
-        occ1 = np.einsum("tni,ti->tn", x, cfg.n1) > cfg.t1[:, None]
-        occ2 = np.einsum("tni,ti->tn", x, cfg.n2) > cfg.t2[:, None]
-        occ = np.where(kind == 0, occ1, np.where(kind == 1, occ1 | occ2, occ1 & occ2))
-        return (~occ).astype(np.float64) @ w
+        occ1 = (np.einsum("tni,ti->tn", x, cfg.n1) > cfg.t1[:, None]).astype(np.float64)
+        occ2 = (np.einsum("tni,ti->tn", x, cfg.n2) > cfg.t2[:, None]).astype(np.float64)
+        # The centre sample, as vo_point counts it (docs/screenspace.md, "The centre sample";
+        # Loos & Sloan 2010, Sec. 4): a sample at the origin, when the first plane passes
+        # through the centre (t1 == 0: every crease, where the centre is the depth buffer's
+        # surface point), lies on that plane, so its test "behind the surface" compares the
+        # surface with itself. It counts half occupied by that plane, the share of its small
+        # Voronoi region behind it. The second plane then decides as for any sample: open
+        # side at a concave crease (t2 > 0, max(1/2, 0)), occupied side at a convex edge
+        # (t2 < 0, min(1/2, 1)), so the centre reads 1/2 on every crease.
+        centre = np.all(pattern.points == 0.0, axis=1)
+        if np.any(centre):
+            on_plane = (cfg.t1 == 0.0)[:, None] & centre[None, :]
+            occ1 = np.where(on_plane, 0.5, occ1)
+        # occupancies in {0, 1/2, 1}: the union is the max, the intersection the min
+        occ = np.where(kind == 0, occ1, np.where(kind == 1, np.maximum(occ1, occ2), np.minimum(occ1, occ2)))
+        return (1.0 - occ) @ w
     # line sampling (Sec. 4.1): the pattern turned or reflected about the view axis; each
     # sample (x, y) stands for the chord [-z_s, z_s] and reads the surface height h(x, y);
     # occupied means behind the surface, z > h
@@ -1147,7 +1171,7 @@ def quality(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed=QUALIT
     pattern : SamplePattern
         A disk pattern is measured with line sampling (each sample (x, y) integrates the chord
         [-z_s, z_s], z_s = sqrt(1 - x^2 - y^2), against a height field), a ball pattern with
-        point sampling.
+        point sampling as ``vo_point`` does it, a sample at the centre included (Notes).
     trials : int, optional
         Number of random configurations (default :data:`QUALITY_TRIALS`).
     seed : int, numpy.random.Generator or None, optional
@@ -1172,7 +1196,13 @@ def quality(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed=QUALIT
     hold every configuration. A crease's occupied set is the union (concave) or the
     intersection (convex) of the two half-spaces. Per trial the pattern is turned by a random
     element of O(2) about the view axis (disk) or of O(3) (ball), as the estimators randomize
-    per pixel (Sec. 4.5). The exact VO: the cap volume (Hegeman et al. 2006, Eq. 4) and
+    per pixel (Sec. 4.5). A ball sample is open when it is not occupied, except a sample
+    exactly at the centre when the first plane passes through it (every crease: the centre is
+    the depth buffer's surface point): its test would compare the surface with itself, so it
+    counts half occupied by that plane, as ``vo_point`` counts it (docs/screenspace.md, "The
+    centre sample"), and the second plane decides as for any sample; the centre alone then
+    reads 1/2 on every crease. (Before :data:`QUALITY_VERSION` 2 it read open there, the bias
+    the estimator had.) The exact VO: the cap volume (Hegeman et al. 2006, Eq. 4) and
     :func:`crease_volume`. The same ``trials`` and int ``seed`` give every pattern the same
     configurations, so differences between patterns are measured with common random numbers.
 
@@ -1330,15 +1360,33 @@ def _build_one(task):
         "equal_integral_error": _equal_integral_error(m)}
 
 
-def _write_table(path: Path, dim: int, method: str, variant: str, seed: int, entries: dict) -> Path:
-    from .. import _io
-
-    counts = sorted(entries)
-    offsets = np.concatenate([[0], np.cumsum([len(entries[n][0]) for n in counts])])
+def _software() -> dict:
+    """Versions of Python, NumPy and SciPy, and NumPy's disabled SIMD kernels when any are
+    (``NPY_DISABLE_CPU_FEATURES``: they can change the last bits of a result)."""
+    import os
     import platform
 
     import scipy
 
+    out = {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__}
+    if os.environ.get("NPY_DISABLE_CPU_FEATURES", "").strip():
+        out["NPY_DISABLE_CPU_FEATURES"] = os.environ["NPY_DISABLE_CPU_FEATURES"].strip()
+    return out
+
+
+def _write_table(path: Path, dim: int, method: str, variant: str, seed: int, entries: dict, *,
+                 generated: dict | None = None, command: str = "python -m vobscure.patterns build") -> Path:
+    """Write one table atomically. ``entries``: {n: (points, weights, record)}.
+
+    ``generated``: the provenance of the table the points come from, when they were not
+    generated by this call (:func:`_rescore_tables`): its ``command`` and ``software`` are kept
+    as the generation's, and the quality record names ``command`` and this software.
+    """
+    from .. import _io
+
+    counts = sorted(entries)
+    offsets = np.concatenate([[0], np.cumsum([len(entries[n][0]) for n in counts])])
+    software = _software()
     prov = {
         "generator": "vobscure.patterns", "version": GENERATOR_VERSION, "domain": _DOMAIN[dim],
         "method": method, "variant": variant,
@@ -1348,10 +1396,10 @@ def _write_table(path: Path, dim: int, method: str, variant: str, seed: int, ent
         "weights_grid": DISK_GRID if dim == 2 else BALL_GRID,
         "optimization_grid": {"base": OPTIMIZATION_GRID[dim], "cells_per_region": OPTIMIZATION_CELLS},
         "quality": {"function": "vobscure.patterns.quality", "trials": QUALITY_TRIALS,
-                    "seed": QUALITY_SEED, "family": "mixed"},
-        "command": "python -m vobscure.patterns build",
-        "software": {"python": platform.python_version(), "numpy": np.__version__,
-                     "scipy": scipy.__version__},
+                    "seed": QUALITY_SEED, "family": "mixed", "version": QUALITY_VERSION,
+                    "note": QUALITY_NOTES[QUALITY_VERSION], "command": command, "software": software},
+        "command": command if generated is None else generated["command"],
+        "software": software if generated is None else generated["software"],
         "entries": {str(n): entries[n][2] for n in counts},
     }
     arrays = {
@@ -1426,14 +1474,58 @@ def build_tables(directory=None, *, quick: bool = False, methods=METHODS, dims=(
         entries = {}
         table = _read_table(str(path))
         if table is not None and _table_usable(table[0], dim, method, seed):
-            entries = {n: (p, w, e) for n, (p, w, e) in table[1].items()}
+            entries = {n: (p, w, e) for n, (p, w, e) in table[1].items() if n not in new}
+            if table[0].get("quality", {}).get("version", 1) != QUALITY_VERSION:
+                entries = _rescored(entries, method)         # kept entries, current metric
         entries.update(new)
         written.append(_write_table(path, dim, method, variant, seed, entries))
     return written
 
 
+def _rescore_tables(directory=None, *, methods=METHODS, dims=(3,)) -> list[Path]:
+    """Re-evaluate the recorded quality of every entry of the existing tables with the current
+    :func:`quality` and rewrite them (atomically), points and weights bit for bit.
+
+    For a change of the metric alone (:data:`QUALITY_VERSION`): the generation's command and
+    software stay in the provenance, the quality record names the re-evaluation. A missing
+    table, or one written by another generator version or with other parameters, is skipped.
+
+    Returns
+    -------
+    list of Path
+        The files rewritten.
+    """
+    for m in methods:
+        check_choice(m, "methods", METHODS)
+    written = []
+    for dim in dims:
+        for method in methods:
+            for variant in VARIANTS[dim]:
+                path = _table_path(dim, method, variant, directory)
+                table = _read_table(str(path))
+                if table is None or not _table_usable(table[0], dim, method, table[0].get("seed")):
+                    continue
+                prov, entries = table
+                written.append(_write_table(path, dim, method, variant, prov["seed"],
+                                            _rescored(entries, method), generated=prov,
+                                            command=f"python -m vobscure.patterns rescore --domain "
+                                                    f"{_DOMAIN[dim]}"))
+    return written
+
+
+def _rescored(entries: dict, method: str) -> dict:
+    """Table entries {n: (points, weights, record)} with the record's quality and its standard
+    error evaluated afresh by :func:`quality`."""
+    out = {}
+    for n, (points, weights, record) in entries.items():
+        q = quality(_exact(points, weights, method, {}))
+        out[n] = (points, weights, dict(record, quality=float(q.value), quality_stderr=float(q.stderr)))
+    return out
+
+
 def main(argv=None) -> int:
-    """``python -m vobscure.patterns build [--quick] [--jobs N] [--methods ...] [--dir DIR]``."""
+    """``python -m vobscure.patterns build [--quick] [--jobs N] [--methods ...] [--dir DIR]``;
+    ``python -m vobscure.patterns rescore [--domain ball] [--dir DIR]``: re-record the quality."""
     parser = argparse.ArgumentParser(prog="python -m vobscure.patterns",
                                      description="Precomputed sample-pattern tables (data/patterns/).")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -1444,11 +1536,18 @@ def main(argv=None) -> int:
     b.add_argument("--domain", choices=("disk", "ball", "both"), default="both")
     b.add_argument("--dir", default=None, help=f"output directory (default {TABLE_DIR})")
     b.add_argument("--no-progress", action="store_true")
+    r = sub.add_parser("rescore", help="re-evaluate the recorded quality of the existing tables "
+                                       "(points and weights kept)")
+    r.add_argument("--domain", choices=("disk", "ball", "both"), default="ball")
+    r.add_argument("--dir", default=None, help=f"table directory (default {TABLE_DIR})")
     args = parser.parse_args(argv)
     dims = {"disk": (2,), "ball": (3,), "both": (2, 3)}[args.domain]
     t0 = time.perf_counter()
-    paths = build_tables(args.dir, quick=args.quick, methods=args.methods, dims=dims, jobs=args.jobs,
-                         progress=not args.no_progress)
+    if args.command == "rescore":
+        paths = _rescore_tables(args.dir, dims=dims)
+    else:
+        paths = build_tables(args.dir, quick=args.quick, methods=args.methods, dims=dims, jobs=args.jobs,
+                             progress=not args.no_progress)
     for p in paths:
         print(p)
     print(f"{len(paths)} tables in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
