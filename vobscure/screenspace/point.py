@@ -46,7 +46,8 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
             # one. Its Voronoi region is a small ball around p, which the tangent plane
             # bisects: it counts half open for the ball and open for the half-ball (Sec.
             # 4.4), its expectation on a locally flat surface. Counted as a test instead,
-            # it biased a plane by + w / 2 (0.530 for the 13-point default, 0.518 for the then-default 33-point Lloyd pattern).
+            # it biased a plane by + w / 2 (0.530 for the 13-point default, 0.518 for the
+            # 33-point Lloyd pattern that was then the default).
             num += w * (1.0 if normal_clamp else 0.5)
             den += w
             continue
