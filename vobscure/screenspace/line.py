@@ -128,17 +128,36 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     # the largest projected radius decides how wide a border the taps can reach
     z_min = float(np.min(depth64[index]))
     padded = C.padded_depth(depth64, (H, W), radius * float(gb.camera.pixels_per_unit(z_min)), offscreen)
+    antipodal = _exactly_antipodal(pattern)
     for chunk, v in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
         # Sec. 4.5: reflection about a random 2-D direction per pixel, 2 (s . v) v - s; one
         # texel of the tiled texture per chunk, so the reflected points are the same for
         # every pixel of the chunk
         points = pattern.points if v is None else 2.0 * (pattern.points @ v)[:, None] * v - pattern.points
-        out[chunk] = _line_nearest(px, points=points, weights=pattern.weights, padded=padded, **options)
+        out[chunk] = _line_nearest(px, points=points, weights=pattern.weights, padded=padded,
+                                   antipodal=antipodal, **options)
     return out.reshape(H, W)
 
 
-def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded):
+def _exactly_antipodal(pattern) -> bool:
+    """True when every point's exact negation is in the pattern with exactly its weight.
+
+    Then, in the clamped line sum, the tangent-plane terms of the two lines of a pair cancel
+    exactly (rint is odd, the plane is linear in the tap offset, the clip is symmetric), and
+    the half-ball's share the samples see is the constant sum of w / 2 (see
+    :func:`_line_nearest`). The reflection of Sec. 4.5 is linear, so it keeps pairs exact.
+    """
+    pts, w = pattern.points, pattern.weights
+    for i in range(len(pts)):
+        match = np.flatnonzero(np.all(pts == -pts[i], axis=1) & (w == w[i]))
+        if not len(match):
+            return False
+    return True
+
+
+def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded,
+                  antipodal=False):
     """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
@@ -150,7 +169,10 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     the plane's depth was read, so a plane reads exactly 1.
 
     The inner loop works in place on a few (k,) buffers; the constant parts of the sums
-    (the z_s half of every chord) are accumulated as scalars.
+    (the z_s half of every chord) are accumulated as scalars. With ``normal_clamp`` the
+    denominator, the half-ball's share the lines see, is sum k_s (hi_s + z_s); for an
+    exactly antipodal pattern (``antipodal``) the hi_s of a pair are opposite and cancel,
+    so it is the constant sum k_s z_s and is not accumulated per pixel.
     """
     k = len(px.index)
     r = px.radius_px
@@ -159,7 +181,8 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     dj, e, t, d = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
     num = np.zeros(k)
     simple = falloff == "constant" and thickness is None
-    den = np.zeros(k) if (normal_clamp or not simple) else None
+    # an exactly antipodal pattern's clamped denominator is the scalar ``const`` (docstring)
+    den = np.zeros(k) if ((normal_clamp and not (simple and antipodal)) or not simple) else None
     if normal_clamp:
         # tangent plane crossing z_plane = gx x + gy y (Sec. 4.4, footnote 4), per tap pixel:
         # x = dj / r, y = e / r
@@ -203,8 +226,9 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                     np.clip(d, -z_s, t, out=d)         # hi >= -z_s: max(min(d, hi), -z_s)
                     d *= k_s
                     num += d
-                    t *= k_s
-                    den += t
+                    if den is not None:
+                        t *= k_s
+                        den += t
                 else:
                     # Sec. 4.1: max(min(z_s, d_r) + z_s, 0), as k_s clip(d_r) + w / 2
                     d *= k_s
@@ -229,6 +253,8 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
         return np.clip((num + const) / wsum, 0.0, 1.0) if wsum > 0 else np.ones(k)
     if simple:
         num += const
+        if den is None:        # antipodal: the pairs' plane terms cancelled
+            return np.clip(num / const, 0.0, 1.0) if const > 0 else np.ones(k)
         den += const
     # clamped, den is the half-ball's share seen by the samples (0: the whole ball lies
     # behind the tangent plane, nothing to occlude)
