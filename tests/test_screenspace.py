@@ -366,3 +366,22 @@ def test_line_kernel_matches_a_pixel_by_pixel_implementation(ortho, monkeypatch)
             np.testing.assert_array_equal(np.isnan(fast), ~gb.valid)
             np.testing.assert_allclose(fast[gb.valid], expected[gb.valid], rtol=0, atol=KERNEL_TOL)
             np.testing.assert_allclose(slow[gb.valid], fast[gb.valid], rtol=0, atol=KERNEL_TOL)
+
+
+@pytest.mark.parametrize("samples", [5, 9, 16])
+def test_clamped_line_constant_denominator_for_antipodal_patterns(samples, monkeypatch):
+    """For an exactly antipodal pattern the clamped denominator is not accumulated (the
+    pairs' tangent-plane terms cancel); accumulating it anyway gives the same image."""
+    from vobscure.screenspace import line as L
+
+    scene = vo.scenes.cornell_box()
+    gb = vo.render_gbuffer(scene, scene.camera((48, 40)))
+    pattern = vo.patterns.disk(samples)
+    assert L._exactly_antipodal(pattern)
+    assert not L._exactly_antipodal(vo.patterns.disk(samples, symmetric=False, method="random", seed=3))
+    fast = vo.vo_line(gb, radius=0.3, samples=pattern, normal_clamp=True)
+    monkeypatch.setattr(L, "_exactly_antipodal", lambda p: False)
+    full = vo.vo_line(gb, radius=0.3, samples=pattern, normal_clamp=True)
+    valid = gb.valid
+    assert np.isnan(fast[~valid]).all() and np.isfinite(fast[valid]).all()
+    np.testing.assert_allclose(fast[valid], full[valid], rtol=0, atol=1e-12)
