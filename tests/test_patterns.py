@@ -575,3 +575,25 @@ def test_claims_analysis_finds_a_planted_dip():
 def test_bad_arguments_name_the_argument(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_tables_are_package_data_reached_from_data_patterns():
+    """The tables ship inside the package (a wheel carries them: pyproject's package-data
+    globs match every table file) and the repository's documented path data/patterns/ is a
+    link to them."""
+    import fnmatch
+    import tomllib
+    from pathlib import Path
+
+    package_dir = Path(P.__file__).resolve().parent
+    assert P.TABLE_DIR == package_dir / "tables"
+    files = sorted(p.relative_to(package_dir).as_posix() for p in P.TABLE_DIR.iterdir())
+    assert sum(f.endswith(".npz") for f in files) == 35
+    root = package_dir.parents[1]
+    pyproject = root / "pyproject.toml"
+    if not pyproject.is_file():
+        pytest.skip("not a source checkout (installed package): no pyproject.toml beside it")
+    globs = tomllib.loads(pyproject.read_text())["tool"]["setuptools"]["package-data"]["vobscure.patterns"]
+    for f in files:
+        assert any(fnmatch.fnmatch(f, g) for g in globs), f"{f} would be missing from a wheel"
+    assert (root / "data" / "patterns").resolve() == P.TABLE_DIR

@@ -148,7 +148,9 @@ FAMILIES = ("mixed", "cap", "crease")
 #: Where the precomputed tables live: ``data/patterns/`` at the root of the repository. The
 #: package is installed editable, so the repository root is the parent of the package folder;
 #: when the folder does not exist (a plain install), every pattern is generated on first use.
-TABLE_DIR = Path(__file__).resolve().parents[2] / "data" / "patterns"
+# The tables live inside the package (so that a wheel carries them: package data) and are
+# reached from the repository's documented path data/patterns/ through a symbolic link.
+TABLE_DIR = Path(__file__).resolve().parent / "tables"
 #: Pattern counts of the tables (n = 1..N), per dimension.
 TABLE_N = {2: 33, 3: 40}
 #: Further counts in the symmetric electrostatic and Lloyd tables (the candidates of the
