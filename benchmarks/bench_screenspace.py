@@ -126,7 +126,7 @@ class Config:
         ``vo_point`` does not tap the centre of an odd (point-symmetric) pattern: it lies on
         the surface and counts half open without a fetch."""
         if self.kind == "point":
-            return self.samples - int(vo.patterns.ball(self.samples).has_center)
+            return vo.screenspace.point_taps(self.samples)
         return self.samples * self.taps_per_sample
 
 

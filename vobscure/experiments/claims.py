@@ -297,8 +297,7 @@ def _measure(scene_name: str, size: tuple, radius, seed: int, rays: int, quick: 
             blurred = vo.bilateral_blur(v, gb)
             repeats = [vo.error(c.run(gb, radius=r, normal_clamp=normal_clamp, seed=seed + k), ref).rmse
                        for k in range(1, SEED_REPEATS + 1)]
-            # vo_point does not tap the centre of an odd pattern (it lies on the surface)
-            taps = c.samples - int(c.method == "point" and vo.patterns.ball(c.samples).has_center)
+            taps = vo.screenspace.point_taps(c.samples) if c.method == "point" else c.samples
             rows.append({
                 "scene": scene_name, "size": tuple(size), "radius": r, "config": c.label,
                 "method": c.method, "samples": c.samples, "fetch": c.fetch_used, "primary": c.primary,

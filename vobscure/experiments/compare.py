@@ -72,9 +72,9 @@ class Method:
         """Depth-buffer taps (fetches) per pixel: one per sample, except the centre of an
         odd point pattern, which ``vo_point`` does not tap (it lies on the surface)."""
         if self.name == "point":
-            from ..patterns import ball
+            from ..screenspace import point_taps
 
-            return self.samples - int(ball(self.samples).has_center)
+            return point_taps(self.samples)
         return self.samples
 
     @property

@@ -53,6 +53,7 @@ Vogel, H. 1979. A better way to construct the sunflower head. Math. Biosci. 44.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import numbers
@@ -1457,19 +1458,17 @@ def build_tables(directory=None, *, quick: bool = False, methods=METHODS, dims=(
     # the expensive ones first, so that the workers finish together
     tasks.sort(key=lambda t: (t[1] not in ("electrostatic", "lloyd"), -t[3] * (1 + (t[0] == 3))))
     results: dict = {f: {} for f in families}
-    with tqdm(total=len(tasks), desc="patterns", unit="pattern", disable=not progress) as bar:
+    with contextlib.ExitStack() as stack:
+        bar = stack.enter_context(tqdm(total=len(tasks), desc="patterns", unit="pattern", disable=not progress))
         if jobs == 1:
-            outputs = map(_build_one, tasks)
-            for task, pts, w, entry in outputs:
-                results[task[:3]][task[3]] = (pts, w, entry)
-                bar.update(1)
+            mapper = map
         else:
             from concurrent.futures import ProcessPoolExecutor
 
-            with ProcessPoolExecutor(max_workers=jobs) as pool:
-                for task, pts, w, entry in pool.map(_build_one, tasks):
-                    results[task[:3]][task[3]] = (pts, w, entry)
-                    bar.update(1)
+            mapper = stack.enter_context(ProcessPoolExecutor(max_workers=jobs)).map
+        for task, pts, w, entry in mapper(_build_one, tasks):
+            results[task[:3]][task[3]] = (pts, w, entry)
+            bar.update(1)
     written = []
     for (dim, method, variant), new in results.items():
         path = _table_path(dim, method, variant, directory)

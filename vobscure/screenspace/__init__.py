@@ -3,6 +3,6 @@
 from .area import vo_area
 from .blur import bilateral_blur, combine_radii
 from .line import vo_line
-from .point import vo_point, vo_reference
+from .point import point_taps, vo_point, vo_reference
 
-__all__ = ["bilateral_blur", "combine_radii", "vo_area", "vo_line", "vo_point", "vo_reference"]
+__all__ = ["bilateral_blur", "combine_radii", "point_taps", "vo_area", "vo_line", "vo_point", "vo_reference"]

@@ -54,17 +54,22 @@ class Pixels:
     normal_image: np.ndarray = field(repr=False, default=None)   # (H * W, 3) view-space normals
 
     @cached_property
+    def ray(self) -> tuple[np.ndarray, np.ndarray]:
+        """(x / z, y / z) of the pixels' view rays (perspective), or their view-space (x, y)
+        (orthographic): the pixel centre's offset from the image centre over ``focal``."""
+        H, W = self.shape
+        return (self.col + (0.5 - W / 2.0)) / self.focal, ((H / 2.0 - 0.5) - self.row) / self.focal
+
+    @cached_property
     def p(self) -> np.ndarray:
         """(k, 3) view-space positions (stored column by column, see :attr:`n`)."""
-        H, W = self.shape
+        rx, ry = self.ray
         p = np.empty((3, len(self.index))).T
         if self.perspective:
-            zf = self.z / self.focal
-            np.multiply(self.col + (0.5 - W / 2.0), zf, out=p[:, 0])
-            np.multiply((H / 2.0 - 0.5) - self.row, zf, out=p[:, 1])
+            np.multiply(rx, self.z, out=p[:, 0])
+            np.multiply(ry, self.z, out=p[:, 1])
         else:
-            p[:, 0] = (self.col + (0.5 - W / 2.0)) / self.focal
-            p[:, 1] = ((H / 2.0 - 0.5) - self.row) / self.focal
+            p[:, 0], p[:, 1] = rx, ry
         p[:, 2] = self.z
         return p
 
@@ -425,7 +430,7 @@ def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
 
 def warper(px: Pixels, radius: float):
     """:func:`warp` for these pixels as a one-argument function, constants precomputed."""
-    z = px.p[:, 2]
+    z = px.z
     if px.perspective:
         a, b = z / radius, z * z / radius
 
@@ -447,10 +452,9 @@ def tangent_plane_coefficients(px: Pixels) -> tuple[np.ndarray, np.ndarray]:
     # components (strided (k, 3) columns make every pass slower)
     nx, ny, nz = np.take(px.normal_image, px.index, axis=0).T.astype(np.float64, order="C")
     if px.perspective:
-        # n . p / z_p, with p / z_p = (x / z, y / z, 1) the pixel's ray: x / z and y / z
-        # from the pixel's column and row (Pixels.p), without the positions themselves
-        H, W = px.shape
-        den = (nx * ((px.col + (0.5 - W / 2.0)) / px.focal) + ny * (((H / 2.0 - 0.5) - px.row) / px.focal)) + nz
+        # n . p / z_p, with p / z_p = (x / z, y / z, 1) the pixel's ray (Pixels.ray)
+        rx, ry = px.ray
+        den = (nx * rx + ny * ry) + nz
     else:
         den = nz.copy()
     length = np.sqrt(nx * nx + ny * ny + nz * nz)

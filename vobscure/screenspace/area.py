@@ -17,7 +17,7 @@ import numpy as np
 from scipy import ndimage, special
 from scipy.spatial import cKDTree
 
-from .._validate import check_choice
+from .._validate import as_array, check_choice
 from ..patterns import DISK_GRID, SamplePattern, _grid
 from . import _common as C
 from .line import _falloff_integral
@@ -639,12 +639,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     pattern = C.as_pattern(samples, 2)
     check_choice(model, "model", MODELS)
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
-    if lod_bias is None:
-        lod_bias = LOD_BIAS[reconstruction]
-    elif isinstance(lod_bias, bool) or not isinstance(lod_bias, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(lod_bias):
-        raise ValueError(f"lod_bias must be a finite number (levels), got {lod_bias!r}")
-    lod_bias = float(lod_bias)
+    lod_bias = LOD_BIAS[reconstruction] if lod_bias is None else float(as_array(lod_bias, "lod_bias", shape=()))
     thickness = C.check_common(offscreen=offscreen, falloff=falloff, thickness=thickness, noise_size=noise_size)
     dtype = C.out_dtype(gbuffer)
     H, W = gb.depth.shape
@@ -672,7 +667,7 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
                  lod_bias, offscreen, pyramid, half_log_area, texture):
     """Area-sampled VO of one chunk of pixels (see :func:`vo_area`)."""
     k = len(px.index)
-    z_p = px.p[:, 2]
+    z_p = px.z
     slope = None
     if normal_clamp:
         # Sec. 4.4 for an area sample: the surface measured from the tangent plane.

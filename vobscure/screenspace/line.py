@@ -181,8 +181,9 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     dj, e, t, d = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
     num = np.zeros(k)
     simple = falloff == "constant" and thickness is None
-    # an exactly antipodal pattern's clamped denominator is the scalar ``const`` (docstring)
-    den = np.zeros(k) if ((normal_clamp and not (simple and antipodal)) or not simple) else None
+    # unclamped (constant falloff), or clamped with an exactly antipodal pattern, the
+    # denominator is the scalar ``const`` (docstring)
+    den = np.zeros(k) if (not simple or (normal_clamp and not antipodal)) else None
     if normal_clamp:
         # tangent plane crossing z_plane = gx x + gy y (Sec. 4.4, footnote 4), per tap pixel:
         # x = dj / r, y = e / r

@@ -12,7 +12,7 @@ from ..patterns import SamplePattern
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
 
-__all__ = ["vo_point", "vo_reference"]
+__all__ = ["vo_point", "vo_reference", "point_taps"]
 
 
 def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thickness, falloff,
@@ -28,6 +28,25 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
+def _is_centre(s) -> bool:
+    """True for the sample at the ball's centre, which :func:`vo_point` does not tap."""
+    return not np.any(s)
+
+
+def point_taps(samples=12) -> int:
+    """Depth taps per pixel :func:`vo_point` makes with ``samples`` (a count or a ball pattern):
+    one per sample except the centre (s = 0) of an odd point-symmetric pattern, which lies on
+    the surface and is counted without a fetch.
+
+    Examples
+    --------
+    >>> point_taps(12), point_taps(33)
+    (12, 32)
+    """
+    pattern = C.as_pattern(samples, 3)
+    return sum(not _is_centre(s) for s in pattern.points)
+
+
 def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetch, offscreen, texture):
     """Point-sampled VO of one chunk of pixels (see :func:`vo_point`)."""
     k = len(px.index)
@@ -39,7 +58,7 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
     num = np.zeros(k)
     den = np.zeros(k)
     for s, w in zip(pattern.points, pattern.weights):
-        if not np.any(s):
+        if _is_centre(s):
             # A sample at the ball's centre lies on the surface itself: the depth buffer
             # cannot tell which side it is on (the test z > d compares a depth with itself
             # up to rounding and filtering), and every point-symmetric pattern of odd n has

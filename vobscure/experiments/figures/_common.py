@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["BACKGROUND", "new_figure", "save_figure", "write_csv", "image_panel",
-           "error_panel", "median_seconds", "corr", "fmt"]
+           "error_panel", "median_seconds", "corr", "fmt", "table_main"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
@@ -113,3 +113,21 @@ def corr(a, b, mask=None) -> float:
 def fmt(x, digits: int = 3) -> str:
     """A float for a title or table cell: fixed ``digits``, "nan" when not finite."""
     return "nan" if x is None or not np.isfinite(x) else f"{x:.{digits}f}"
+
+
+def table_main(module: str, measure, make, markdown, argv=None) -> int:
+    """``python -m <module> [--quick] [--out DIR] [--seed N]``: measure once, draw the figure
+    from those rows (``make(..., rows=rows)``) and print them as ``markdown(rows)``."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog=f"python -m {module}")
+    ap.add_argument("--quick", action="store_true", help="small and fast")
+    ap.add_argument("--out", default=".", help="directory of the PNG and CSV")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    rows = measure(args.quick, seed=args.seed)
+    paths = make(args.out, quick=args.quick, seed=args.seed, rows=rows)
+    print(markdown(rows))
+    for path in paths:
+        print(f"wrote {path}")
+    return 0

@@ -60,7 +60,7 @@ def measure(quick: bool = False, *, seed: int = 0, cache=False):
     return rows
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False) -> list[Path]:
+def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False, rows=None) -> list[Path]:
     """Draw ``error_decomposition.png``.
 
     Parameters
@@ -69,6 +69,8 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False) -> list[Pa
     quick : bool
         40 x 40 images and few reference samples (seconds), for CI; 160 x 160 otherwise.
     seed : int
+    rows : list of dict, optional
+        The rows of :func:`measure`, when already computed (drawn as given).
     cache : bool or path
         Reference cache, as in :func:`vobscure.experiments.compare.compare`.
 
@@ -83,7 +85,7 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False) -> list[Pa
     """
     from . import _common
 
-    rows = measure(quick, seed=seed, cache=cache)
+    rows = measure(quick, seed=seed, cache=cache) if rows is None else rows
     fig = _common.new_figure(12, 4.2 * len(SCENES) + 0.4)
     axes = fig.subplots(len(SCENES), 2, squeeze=False)
     for i, scene in enumerate(SCENES):
@@ -126,7 +128,7 @@ def markdown(rows) -> str:
     head = "| scene | configuration | " + " | ".join(f"{t} bias | {t} RMSE" for t in _TERMS4) + " |"
     lines = [head, "|---|---|" + "---:|" * (2 * len(_TERMS4))]
     for r in rows:
-        cells = " | ".join(f"{float(r[f'{t}_error_bias']):+.4f} | {float(r[f'{t}_error_rmse']):.4f}"
+        cells = " | ".join(f"{r[f'{t}_error_bias']:+.4f} | {r[f'{t}_error_rmse']:.4f}"
                            for t in _TERMS4)
         lines.append(f"| {r['scene']} | {r['method']} {r['samples']} | {cells} |")
     return "\n".join(lines)
@@ -134,20 +136,9 @@ def markdown(rows) -> str:
 
 def main(argv=None) -> int:
     """``python -m vobscure.experiments.figures.error_decomposition [--quick] [--out DIR]``."""
-    import argparse
-    import csv
+    from ._common import table_main
 
-    ap = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.error_decomposition")
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--out", default=".")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
-    paths = make(args.out, quick=args.quick, seed=args.seed)
-    with open(paths[1], newline="") as fh:
-        print(markdown(list(csv.DictReader(fh))))
-    for path in paths:
-        print(f"wrote {path}")
-    return 0
+    return table_main("vobscure.experiments.figures.error_decomposition", measure, make, markdown, argv)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -68,13 +68,12 @@ _COLORS = {"line": "#1f77b4", "point": "#d62728"}
 
 
 def _taps(method: str, n: int) -> int:
-    """Depth taps per pixel: one per sample, but vo_point does not tap the centre of an odd
-    (point-symmetric) pattern, which lies on the surface."""
-    if method == "point":
-        from ...patterns import ball
+    """Depth taps per pixel (:func:`vobscure.screenspace.point_taps` for points)."""
+    from ...screenspace import point_taps
 
-        return n - int(ball(n).has_center)
-    return n
+    return point_taps(n) if method == "point" else n
+
+
 _NAMES = {"cornell_box": "Cornell box", "blob": "blob"}
 
 

@@ -56,7 +56,7 @@ def measure(quick: bool = False, *, seed: int = 0):
     return rows
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
+def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
     """Draw ``temporal_stability.png``.
 
     Parameters
@@ -65,6 +65,8 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
     quick : bool
         40 x 40 images, 4 frames (seconds), for CI; 128 x 128 and 12 frames otherwise.
     seed : int
+    rows : list of dict, optional
+        The rows of :func:`measure`, when already computed (drawn as given).
 
     Returns
     -------
@@ -77,7 +79,7 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
     """
     from . import _common
 
-    rows = measure(quick, seed=seed)
+    rows = measure(quick, seed=seed) if rows is None else rows
     fig = _common.new_figure(12, 3.9 * len(SCENES))
     axes = fig.subplots(len(SCENES), 2, squeeze=False)
     for i, scene in enumerate(SCENES):
@@ -112,24 +114,9 @@ def markdown(rows) -> str:
 
 def main(argv=None) -> int:
     """``python -m vobscure.experiments.figures.temporal_stability [--quick] [--out DIR]``."""
-    import argparse
+    from ._common import table_main
 
-    ap = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.temporal_stability")
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--out", default=".")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
-    paths = make(args.out, quick=args.quick, seed=args.seed)
-    import csv
-
-    with open(paths[1], newline="") as fh:
-        rows = [dict(r, samples=int(r["samples"]), taps_per_pixel=int(r["taps_per_pixel"]),
-                     flicker=float(r["flicker"]), flicker_raw=float(r["flicker_raw"]),
-                     screen_rmse=float(r["screen_rmse"])) for r in csv.DictReader(fh)]
-    print(markdown(rows))
-    for path in paths:
-        print(f"wrote {path}")
-    return 0
+    return table_main("vobscure.experiments.figures.temporal_stability", measure, make, markdown, argv)
 
 
 if __name__ == "__main__":  # pragma: no cover
