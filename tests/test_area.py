@@ -364,7 +364,7 @@ def test_crease_converges_towards_the_closed_form(crease_ortho, model):
 
 @pytest.fixture(scope="module")
 def crease_reference_clamped(crease_ortho):
-    return vo.vo_reference(crease_ortho, radius=1.0, samples=2048, normal_clamp=True, seed=0)
+    return vo.vo_reference(crease_ortho, radius=1.0, samples=2048, normal_clamp=True, seed=0).value
 
 
 @pytest.mark.parametrize("model", area.MODELS)

@@ -41,7 +41,7 @@ def scene_setup():
     scene = vo.scenes.get("cornell_box")
     gb = vo.render_gbuffer(scene, scene.camera((48, 48)))
     radius = 0.1 * scene.extent
-    ref = vo.vo_reference(gb, radius=radius, samples=512, normal_clamp=True, seed=0)
+    ref = vo.vo_reference(gb, radius=radius, samples=512, normal_clamp=True, seed=0).value
     return gb, radius, ref
 
 

@@ -118,8 +118,8 @@ def test_line_converges_to_closed_forms_orthographic(crease_view):
 
 
 def _noise_pairs(gb, floor, **kw):
-    r1 = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=11, **kw)
-    r2 = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=12, **kw)
+    r1 = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=11, **kw).value
+    r2 = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=12, **kw).value
     return r1, r2
 
 
@@ -162,7 +162,7 @@ def test_perspective_line_approximation_is_measured(big_slab):
         gb = vo.render_gbuffer(scene, cam)
         inside = interior(gb, radius)
         line = vo.vo_line(gb, radius=radius, samples=129, randomize=False)
-        ref = vo.vo_reference(gb, radius=radius, samples=2048, seed=3)
+        ref = vo.vo_reference(gb, radius=radius, samples=2048, seed=3).value
         errs.append(np.mean(np.abs(line - ref)[inside]))
     assert errs[1] < errs[0]
 
@@ -224,11 +224,15 @@ def _silent(fn, *args, **kw):
             return fn(*args, **kw)
 
 
-@pytest.mark.parametrize("fn", [vo.vo_line, vo.vo_point, vo.vo_reference])
+def _reference_value(gbuffer, **kw):
+    return vo.vo_reference(gbuffer, **kw).value
+
+
+@pytest.mark.parametrize("fn", [vo.vo_line, vo.vo_point, _reference_value])
 def test_extremes(fn, crease_view):
     gb, _, _ = crease_view
     scene = vo.scenes.crease()
-    kw = dict(samples=64) if fn is vo.vo_reference else {}
+    kw = dict(samples=64) if fn is _reference_value else {}
     for radius in (1e-7, 1e-3, 1e3):   # below a pixel ... larger than the scene
         for clamp in (False, True):
             v = fn(gb, radius=radius, normal_clamp=clamp, **kw)
@@ -385,3 +389,103 @@ def test_clamped_line_constant_denominator_for_antipodal_patterns(samples, monke
     valid = gb.valid
     assert np.isnan(fast[~valid]).all() and np.isfinite(fast[valid]).all()
     np.testing.assert_allclose(fast[valid], full[valid], rtol=0, atol=1e-12)
+
+# ----------------------------------------------------------------------------- vo_reference
+#: Probability that one of the reference's statistical tests below fails although the code is
+#: right (each test splits it over its assertions, Bonferroni).
+REFERENCE_FALSE_FAILURE = FALSE_FAILURE
+
+
+def _reference_floor(crease_view, c_max=0.8):
+    """Floor pixels of the orthographic crease with c < c_max (beyond, a group can miss the
+    wall's small cap entirely: docs/groundtruth.md, "When the standard error degenerates")."""
+    gb, floor, c = crease_view
+    keep = np.zeros_like(floor)
+    keep[floor] = c < c_max
+    return gb, keep, c[c < c_max]
+
+
+@pytest.mark.parametrize("normal_clamp", [False, True])
+def test_reference_stderr_is_honest_against_closed_forms(crease_view, normal_clamp):
+    """Every floor pixel's t-score against the closed-form ball / half-ball VO, with the
+    reported stderr (groups - 1 degrees of freedom), Bonferroni over the pixels."""
+    from conftest import t_threshold
+    from vobscure.estimate import DEFAULT_GROUPS
+
+    gb, floor, c = _reference_floor(crease_view)
+    e = vo.vo_reference(gb, radius=R_CREASE, samples=1024, normal_clamp=normal_clamp, seed=21)
+    assert isinstance(e, vo.Estimate) and e.value.shape == e.stderr.shape == gb.shape
+    assert e.samples == 1024
+    assert np.isnan(e.value[~gb.valid]).all() and np.isnan(e.stderr[~gb.valid]).all()
+    exact = half_ball_vo(c) if normal_clamp else ball_vo(c)
+    z = (e.value[floor] - exact) / e.stderr[floor]
+    assert np.all(e.stderr[floor] > 0)
+    limit = t_threshold(DEFAULT_GROUPS - 1, tests=2 * z.size, false_failure=REFERENCE_FALSE_FAILURE)
+    assert np.max(np.abs(z)) < limit, (np.abs(z).max(), limit)
+
+
+def test_reference_stderr_matches_the_spread_over_seeds(crease_view):
+    """The reported stderr is the standard deviation of the value over seeds: at each of a
+    few pixels, the variance of the values over independent seeds against the mean reported
+    variance is F-distributed (seeds - 1 and seeds (groups - 1) degrees of freedom)."""
+    from vobscure.estimate import DEFAULT_GROUPS
+
+    gb, floor, c = _reference_floor(crease_view)
+    rows, cols = np.nonzero(floor)
+    pick = np.linspace(0, len(rows) - 1, 8).astype(int)        # spread over the floor
+    seeds = 12
+    runs = [vo.vo_reference(gb, radius=R_CREASE, samples=256, seed=100 + s) for s in range(seeds)]
+    values = np.array([r.value[rows[pick], cols[pick]] for r in runs])     # (seeds, pixels)
+    reported = np.array([r.stderr[rows[pick], cols[pick]] for r in runs]) ** 2
+    ratio = values.var(axis=0, ddof=1) / reported.mean(axis=0)
+    alpha = REFERENCE_FALSE_FAILURE / (2 * len(pick))
+    lo, hi = stats.f.ppf([alpha, 1 - alpha], seeds - 1, seeds * (DEFAULT_GROUPS - 1))
+    assert np.all((ratio > lo) & (ratio < hi)), (ratio, lo, hi)
+
+
+def test_reference_is_deterministic_by_seed(crease_view):
+    gb, _, _ = crease_view
+    a = vo.vo_reference(gb, radius=0.5, samples=128, seed=4)
+    b = vo.vo_reference(gb, radius=0.5, samples=128, seed=4)
+    c = vo.vo_reference(gb, radius=0.5, samples=128, seed=5)
+    for x, y in ((a.value, b.value), (a.stderr, b.stderr)):
+        assert x.tobytes() == y.tobytes()
+    assert a.samples == b.samples
+    assert not np.array_equal(a.value, c.value, equal_nan=True)
+    # a Generator is consumed, not copied: two calls from one Generator differ
+    rng = np.random.default_rng(4)
+    assert not np.array_equal(vo.vo_reference(gb, radius=0.5, samples=128, seed=rng).value,
+                              vo.vo_reference(gb, radius=0.5, samples=128, seed=rng).value, equal_nan=True)
+
+
+def test_reference_sample_counts_and_groups(crease_view):
+    gb, _, _ = crease_view
+    small = gb.astype(np.float32)
+    e = vo.vo_reference(small, radius=0.5, samples=100, groups=4, seed=0)
+    assert e.samples == 104                       # rounded up to a multiple of 2 * groups
+    assert e.value.dtype == np.float32 and e.stderr.dtype == np.float32
+    assert vo.vo_reference(gb, radius=0.5, samples=2, seed=0).samples == 2 * 8
+    for bad in (dict(groups=1), dict(groups=2.5), dict(samples=1), dict(samples=vo.patterns.disk(5))):
+        with pytest.raises(ValueError, match="groups" if "groups" in bad else "samples"):
+            vo.vo_reference(gb, radius=0.5, **{"samples": 64, **bad})
+
+
+def test_reference_accepts_a_sample_pattern(crease_view, big_slab):
+    """A ball pattern: each group is the pattern under its own random per-pixel reflection."""
+    gb, floor, c = crease_view
+    pattern = vo.patterns.ball(33)
+    e = vo.vo_reference(gb, radius=R_CREASE, samples=pattern, seed=2)
+    assert e.samples == 8 * 33
+    assert np.isnan(e.value[~gb.valid]).all() and np.isfinite(e.value[gb.valid]).all()
+    assert np.all(e.stderr[floor] > 0)
+    again = vo.vo_reference(gb, radius=R_CREASE, samples=pattern, seed=2)
+    assert e.value.tobytes() == again.value.tobytes()
+    # the mean of vo_point's randomizations: close to the converged value on the crease
+    dense = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=3)
+    assert abs(np.mean(e.value[floor] - dense.value[floor])) < 0.02
+    # a point-symmetric pattern is exact on a plane under any reflection: stderr 0 there
+    cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(32, 24), ortho_height=2.0)
+    plane = vo.render_gbuffer(big_slab, cam)
+    inside = interior(plane, 0.3)
+    p = vo.vo_reference(plane, radius=0.3, samples=vo.patterns.ball(12), normal_clamp=True, seed=0)
+    assert np.max(np.abs(p.value[inside] - 1.0)) < PLANE_TOL

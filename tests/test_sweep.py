@@ -118,7 +118,7 @@ def test_numbers_equal_a_direct_computation(threaded):
     scene = vo.scenes.crease()
     gb = vo.render_gbuffer(scene, scene.camera(c.size))
     est = vo.vo_line(gb, radius=0.5, samples=5, seed=1)
-    screen = vo.vo_reference(gb, radius=0.5, samples=128, seed=0)
+    screen = vo.vo_reference(gb, radius=0.5, samples=128, seed=0).value
     ao = vo.ground_truth(scene, gb, quantity="ao", radius=0.5, rays=16, seed=0, progress=False)
     assert est.tobytes() == r.image.tobytes()
     assert vo.error(est, screen) == r.errors["screen"]

@@ -6,7 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Estimate"]
+__all__ = ["Estimate", "DEFAULT_GROUPS"]
+
+#: Independent randomizations behind every Monte Carlo reference (the ray-cast ground truth,
+#: :func:`vobscure.vo_reference`): the stderr has DEFAULT_GROUPS - 1 degrees of freedom.
+DEFAULT_GROUPS = 8
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ import trimesh
 from tqdm.auto import tqdm
 
 from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
-from .estimate import Estimate
+from .estimate import DEFAULT_GROUPS, Estimate
 from .raytrace import CHUNK_RAYS, parallel_map
 from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base,
                        square_to_cosine_hemisphere, square_to_uniform_hemisphere)
@@ -32,9 +32,6 @@ from .scenes import Scene
 
 __all__ = ["ambient_occlusion", "obscurance", "volumetric_obscurance", "ground_truth",
            "OBSCURANCE_FALLOFFS", "VO_FALLOFFS", "DEFAULT_GROUPS"]
-
-#: Independent randomizations per point; the stderr has DEFAULT_GROUPS - 1 degrees of freedom.
-DEFAULT_GROUPS = 8
 
 _WARPS = {"cosine": square_to_cosine_hemisphere, "uniform": square_to_uniform_hemisphere}
 

@@ -260,7 +260,7 @@ def decompose(estimate, screen_reference, world_vo, *, ao=None, obscurance=None,
     ----------
     estimate : (H, W) array_like
         The estimator's visibility (e.g. :func:`vobscure.vo_line`), NaN on background.
-    screen_reference : (H, W) array_like
+    screen_reference : (H, W) array_like or Estimate
         The converged screen-space VO with the estimator's settings
         (:func:`vobscure.vo_reference`).
     world_vo : (H, W) array_like or Estimate

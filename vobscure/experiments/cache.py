@@ -53,7 +53,7 @@ import numpy as np
 
 from .._io import save_npz
 from .._validate import check_choice, check_int, check_positive
-from ..estimate import Estimate
+from ..estimate import DEFAULT_GROUPS, Estimate
 
 __all__ = ["ReferenceCache", "CacheWarning", "CacheError", "REFERENCE_CODE_VERSION", "CACHE_FORMAT",
            "CACHE_ENV", "default_directory", "cache_key", "canonical_json", "scene_digest",
@@ -62,7 +62,7 @@ __all__ = ["ReferenceCache", "CacheWarning", "CacheError", "REFERENCE_CODE_VERSI
 #: Version of the code that computes references (ground truth, G-buffer rendering,
 #: ``vo_reference``). Bump it whenever a change alters their numbers: every cached entry made
 #: before then stops matching and is recomputed.
-REFERENCE_CODE_VERSION = "1"
+REFERENCE_CODE_VERSION = "2"
 #: Layout of an entry file (the provenance fields and array records read back by :meth:`load`).
 CACHE_FORMAT = 1
 #: Environment variable naming the default cache folder.
@@ -556,7 +556,7 @@ def ground_truth_cached(scene, gbuffer, *, cache, quantity: str = "ao", radius=N
     G-buffer's hits and its camera, the parameters, the seed and the versions.
     """
     from ..gbuffer import GBuffer
-    from ..groundtruth import DEFAULT_GROUPS, OBSCURANCE_FALLOFFS, QUANTITIES, VO_FALLOFFS, ground_truth
+    from ..groundtruth import OBSCURANCE_FALLOFFS, QUANTITIES, VO_FALLOFFS, ground_truth
 
     cache = _as_cache(cache)
     if not isinstance(gbuffer, GBuffer):
@@ -599,7 +599,8 @@ def ground_truth_cached(scene, gbuffer, *, cache, quantity: str = "ao", radius=N
 
 def screen_reference_cached(gbuffer, scene=None, *, cache, radius, samples: int = 4096,
                             normal_clamp: bool = False, thickness=None, falloff: str = "constant",
-                            seed=0, fetch: str = "bilinear", offscreen: str = "clamp") -> tuple[np.ndarray, bool]:
+                            seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
+                            groups=None) -> tuple[Estimate, bool]:
     """:func:`vobscure.vo_reference` (the converged screen-space VO), cached.
 
     Parameters
@@ -609,14 +610,16 @@ def screen_reference_cached(gbuffer, scene=None, *, cache, radius, samples: int 
         Recorded in the entry's provenance only: the G-buffer alone decides the numbers.
     cache : ReferenceCache or None
         None computes without caching.
-    radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen
-        As in :func:`vobscure.vo_reference`; ``seed`` must be an int.
+    radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen, groups
+        As in :func:`vobscure.vo_reference`; ``seed`` must be an int and ``samples`` an int
+        (a SamplePattern has no key). ``groups=None`` is the default number of groups.
 
     Returns
     -------
-    visibility : (H, W) ndarray
-        NaN on background.
+    estimate : Estimate
+        (H, W) value and stderr, NaN on background.
     hit : bool
+        True when it came from the cache.
 
     Notes
     -----
@@ -632,21 +635,22 @@ def screen_reference_cached(gbuffer, scene=None, *, cache, radius, samples: int 
     seed = _seed(seed)
     radius = check_positive(radius, "radius")
     samples = check_int(samples, "samples", minimum=2)
+    groups = DEFAULT_GROUPS if groups is None else check_int(groups, "groups", minimum=2)
     if thickness is not None:
         thickness = check_positive(thickness, "thickness")
     fields = {"kind": "screen_reference", "quantity": "screen",
               "gbuffer": gbuffer_digest(gbuffer), "camera": gbuffer.camera.to_dict(),
               "params": {"radius": radius, "samples": samples, "normal_clamp": bool(normal_clamp),
                          "thickness": thickness, "falloff": str(falloff), "fetch": str(fetch),
-                         "offscreen": str(offscreen)},
+                         "offscreen": str(offscreen), "groups": groups},
               "seed": seed}
 
     def compute():
-        value = vo_reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
-                             thickness=thickness, falloff=falloff, seed=seed, fetch=fetch,
-                             offscreen=offscreen)
-        return {"value": value}
+        return vo_reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
+                            thickness=thickness, falloff=falloff, seed=seed, fetch=fetch,
+                            offscreen=offscreen, groups=groups)
 
     info = None if scene is None else _scene_info(scene)
-    result, hit = cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape}, info=info)
-    return result["value"], hit
+    result, hit = cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape, "stderr": gbuffer.shape},
+                                       info=info)
+    return result, hit

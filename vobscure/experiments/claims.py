@@ -276,7 +276,7 @@ def _measure(scene_name: str, size: tuple, radius, seed: int, rays: int, quick: 
     ao = vo.ground_truth(scene, gb, quantity="ao", radius=r, rays=rays, seed=seed, progress=False)
     rows, images, reference, truth = [], {}, {}, {}
     for normal_clamp in (False, True):
-        ref = vo.vo_reference(gb, radius=r, samples=ref_samples, normal_clamp=normal_clamp, seed=seed)
+        ref = vo.vo_reference(gb, radius=r, samples=ref_samples, normal_clamp=normal_clamp, seed=seed).value
         gt = vo.ground_truth(scene, gb, quantity="volumetric", radius=r, samples=gt_samples,
                              normal_clamp=normal_clamp, seed=seed, progress=False)
         reference[normal_clamp], truth[normal_clamp] = ref, gt

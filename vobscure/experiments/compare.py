@@ -177,9 +177,10 @@ def _references(scene, gb, radius, references, *, normal_clamp, thickness, rays,
     refs, hits = {}, {}
     for name in references:
         if name == "screen":
-            refs[name], hits[name] = screen_reference_cached(
+            est, hits[name] = screen_reference_cached(
                 gb, scene, cache=cache, radius=radius, samples=screen_samples, normal_clamp=normal_clamp,
                 thickness=thickness, seed=seed)
+            refs[name] = est.value
         elif name == "volumetric":
             est, hits[name] = ground_truth_cached(scene, gb, cache=cache, quantity="volumetric", radius=radius,
                                                   samples=samples, normal_clamp=normal_clamp, seed=seed,
@@ -367,7 +368,7 @@ def _orbit(sc, camera, rows, methods, radii, frames, *, normal_clamp, thickness,
         gb = render_gbuffer(sc, cam)
         for r in radii:
             refs[r].append(vo_reference(gb, radius=r, samples=screen_samples, normal_clamp=normal_clamp,
-                                        thickness=thickness, seed=seed))
+                                        thickness=thickness, seed=seed).value)
             for m in methods:
                 seq[(r, m.label)].append(m.run(gb, radius=r, normal_clamp=normal_clamp, thickness=thickness,
                                                seed=seed))

@@ -365,7 +365,7 @@ def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache) 
                       thickness=config.thickness, falloff=config.falloff, seed=seed)
 
         def make():
-            return screen_reference_cached(gb, scene, cache=cache, **params)[0]
+            return screen_reference_cached(gb, scene, cache=cache, **params)[0].value
     else:
         params = dict(quantity=name, radius=radius, rays=config.rays, samples=config.rays, seed=seed)
         if name == "volumetric":
@@ -383,12 +383,19 @@ def _estimator(config: SweepConfig):
     from .. import screenspace
 
     return {"point": screenspace.vo_point, "line": screenspace.vo_line, "area": screenspace.vo_area,
-            "reference": screenspace.vo_reference}[config.method]
+            "reference": _reference_value}[config.method]
+
+
+def _reference_value(gbuffer, **kwargs) -> np.ndarray:
+    from .. import screenspace
+
+    return screenspace.vo_reference(gbuffer, **kwargs).value
 
 
 def _taps(config: SweepConfig) -> int:
     if config.method == "reference":
-        return 2 * -(-config.samples // 2)   # vo_reference rounds up to antithetic pairs
+        from ..estimate import DEFAULT_GROUPS   # vo_reference: antithetic pairs in every group
+        return 2 * DEFAULT_GROUPS * -(-config.samples // (2 * DEFAULT_GROUPS))
     return config.samples
 
 

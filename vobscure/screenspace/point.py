@@ -8,6 +8,7 @@ from functools import partial
 import numpy as np
 
 from .._validate import as_rng, check_int
+from ..estimate import DEFAULT_GROUPS, Estimate
 from ..patterns import SamplePattern
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
@@ -157,52 +158,128 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
                      offscreen=offscreen, noise_size=noise_size)
 
 
-def vo_reference(gbuffer, *, radius: float, samples: int = 4096, normal_clamp: bool = False,
+def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = False,
                  thickness=None, falloff: str = "constant", seed=0, fetch: str = "bilinear",
-                 offscreen: str = "clamp") -> np.ndarray:
+                 offscreen: str = "clamp", groups: int = DEFAULT_GROUPS) -> Estimate:
     """The converged screen-space VO: dense stratified sampling of the depth-buffer occupancy.
 
     What every screen-space estimator tends to with infinitely many samples (line sampling
     exactly so under an orthographic camera): the reference that separates an estimator's
-    sampling error from the error of the screen-space model itself. ``samples`` points fill
-    the ball by stratified (jittered) sampling, antithetic pairs included, each pixel with
-    its own random 3-D reflection of the set; the pixels are processed one sample at a time,
-    so memory does not grow with ``samples``.
+    sampling error from the error of the screen-space model itself. It tests the same
+    occupancy as :func:`vo_point`: a point X = p + R s of the ball (of the half-ball with
+    ``normal_clamp``) is occupied when it lies behind the depth buffer at its projection.
+
+    The ``samples`` are split into ``groups`` independent randomizations, computed one after
+    another (memory follows the image, not ``samples``). Each group fills the ball with its
+    own stratified set (jittered cells of a grid in the unit cube, mapped volume-preservingly
+    into the ball, plus the antithetic partner -s of every point) and gives each pixel its
+    own random 3-D reflection of the set. Every group mean is then an unbiased estimate of
+    the pixel's screen-space VO; the value is their mean and the standard error their
+    standard deviation over sqrt(groups), a Student-t quantity with ``groups - 1`` degrees
+    of freedom (as for the ray-cast ground truth, ``docs/groundtruth.md``).
 
     Parameters
     ----------
     gbuffer : GBuffer
+        The depth and view-space normal images (:func:`vobscure.render_gbuffer`).
     radius : float
-    samples : int
-        Points in the ball (rounded up to an even number).
-    normal_clamp, thickness, falloff, seed, fetch, offscreen
-        As in :func:`vo_point`.
+        Radius R of the ball, in world units.
+    samples : int or SamplePattern
+        An int: points in the ball over all groups, rounded up to a multiple of
+        2 * ``groups`` (each group's points come in antithetic pairs). A ball pattern
+        ((n, 3), :func:`vobscure.patterns.ball`): each group uses that pattern with its own
+        random 3-D reflection per pixel (the randomization of :func:`vo_point`), so the
+        result is the expectation of :func:`vo_point` with that pattern over its per-pixel
+        randomization, with a standard error for that randomization only; a reflected fixed
+        pattern is not uniform in the ball, so this expectation may differ from the
+        screen-space VO by the pattern's bias, which the stderr does not include.
+        ``samples`` of the result is then ``groups * n``.
+    normal_clamp : bool
+        Reflect samples below the tangent plane above it (Loos & Sloan Sec. 4.4): the
+        half-ball on the normal's side. A plane then reads 1.0 instead of 0.5.
+    thickness : float, optional
+        A point is occupied only within this world thickness behind the depth buffer (Sec.
+        4.3); None: everything behind the depth buffer is solid.
+    falloff : {"constant", "quadratic"}
+        rho = 1, or 1 - |s|^2 (samples weighted by it and the result normalized).
+    seed : int, Generator or None
+        Converted once; the groups draw their points and reflections from it in turn, so the
+        same seed gives the same result bit for bit.
+    fetch : {"bilinear", "nearest"}
+        Depth-buffer reconstruction between pixel centres: ``"bilinear"`` (planes exact,
+        1/z interpolated under perspective) or ``"nearest"`` (the pixel's depth as a constant).
+    offscreen : {"clamp", "open"}
+        Points that project off the image read the nearest edge pixel (``"clamp"``) or count
+        as open (``"open"``).
+    groups : int
+        Independent randomizations (>= 2; the standard error's degrees of freedom + 1).
+        Default :data:`vobscure.estimate.DEFAULT_GROUPS`, as for the ground truth.
 
     Returns
     -------
-    (H, W) ndarray
-        Visibility, NaN on background.
+    Estimate
+        ``value`` and ``stderr`` of shape (H, W), NaN on background (float32 for a float32
+        G-buffer). Where every group agrees on a value strictly between 0 and 1, ``stderr``
+        is one step of a group mean (1 / points per group, over sqrt(groups)) instead of 0;
+        where all agree on 0 or 1 it is 0. ``samples`` is the number of points per pixel.
+
+    References
+    ----------
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4 (point sampling of the ball),
+    4.3 (thickness), 4.4 (the half-ball), 4.5 (per-pixel randomization).
 
     Examples
     --------
     >>> import vobscure as vo
     >>> cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(8, 8), fov_y=40)
     >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam)
-    >>> float(vo.vo_reference(gb, radius=0.3, samples=256, normal_clamp=True)[4, 4])
-    1.0
+    >>> ref = vo.vo_reference(gb, radius=0.3, samples=256, normal_clamp=True)
+    >>> float(ref.value[4, 4]), float(ref.stderr[4, 4]), ref.samples
+    (1.0, 0.0, 256)
     """
-    samples = check_int(samples, "samples", minimum=2)
+    pattern = samples if isinstance(samples, SamplePattern) else None
+    if pattern is not None:
+        pattern = C.as_pattern(pattern, 3)
+    else:
+        samples = check_int(samples, "samples", minimum=2)
+    g = check_int(groups, "groups", minimum=2)
     rng = as_rng(seed)
-    half = -(-samples // 2)
-    # stratified: jittered cells of a (half)-point Sobol'-free grid in the unit cube, mapped
-    # volume-preservingly into the ball, plus the antithetic partner of every point
-    cells = int(np.ceil(half ** (1 / 3)))
-    idx = rng.permutation(cells ** 3)[:half]
-    ijk = np.stack(np.unravel_index(idx, (cells,) * 3), axis=1)
-    u = (ijk + rng.random((half, 3))) / cells
-    pts = cube_to_uniform_ball(u)
-    pattern = SamplePattern(np.vstack([pts, -pts]), np.ones(2 * half), method="stratified",
-                            provenance={"generator": "vobscure.vo_reference", "samples": 2 * half})
-    return _point_vo(gbuffer, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
-                     thickness=thickness, falloff=falloff, randomize=True, seed=rng, fetch=fetch,
-                     offscreen=offscreen, noise_size=64)
+    if pattern is None:
+        # each group: half points and their antithetic partners
+        half = max(1, -(-samples // (2 * g)))
+        cells = int(np.ceil(half ** (1 / 3)))
+        total = g * 2 * half
+    else:
+        total = g * len(pattern.points)
+    mean = M2 = None
+    for k in range(1, g + 1):
+        if pattern is None:
+            # stratified: jittered cells of a grid in the unit cube (a random subset of the
+            # cells when half is not a cube), mapped volume-preservingly into the ball
+            idx = rng.permutation(cells ** 3)[:half]
+            ijk = np.stack(np.unravel_index(idx, (cells,) * 3), axis=1)
+            pts = cube_to_uniform_ball((ijk + rng.random((half, 3))) / cells)
+            group_pattern = SamplePattern(np.vstack([pts, -pts]), np.ones(2 * half), method="stratified",
+                                          provenance={"generator": "vobscure.vo_reference",
+                                                      "samples": 2 * half})
+        else:
+            group_pattern = pattern
+        x = _point_vo(gbuffer, radius=radius, pattern=group_pattern, normal_clamp=normal_clamp,
+                      thickness=thickness, falloff=falloff, randomize=True, seed=rng, fetch=fetch,
+                      offscreen=offscreen, noise_size=64).astype(np.float64)
+        # Welford's running mean and sum of squared deviations of the group means
+        if mean is None:
+            mean, M2 = x, np.zeros_like(x)
+        else:
+            delta = x - mean
+            mean = mean + delta / k
+            M2 += delta * (x - mean)
+    dtype = C.out_dtype(gbuffer)
+    stderr = np.sqrt(np.maximum(M2, 0.0) / (g - 1)) / np.sqrt(g)
+    # Few points per group can make every group read the same (a pixel whose ball barely
+    # reaches an occluder that no group's points hit): a spread of 0 although the value is
+    # not exact. As for the ground truth (docs/groundtruth.md, "When the standard error
+    # degenerates"), report one step of a group mean, 1 / (points per group), per group there.
+    degenerate = (stderr == 0) & (mean > 0) & (mean < 1)
+    stderr[degenerate] = 1.0 / ((total // g) * np.sqrt(g))
+    return Estimate(value=mean.astype(dtype), stderr=stderr.astype(dtype), samples=int(total))

@@ -140,12 +140,13 @@ def _setup(size: tuple, seed: int, ref_samples: int, noise: bool) -> _Setup:
     radius = 0.1 * scene.extent                      # claims.RADIUS_FRACTION
     reference, limit, ref_noise = {}, {}, {}
     for nc in (False, True):
-        reference[nc] = vo.vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc, seed=seed)
+        reference[nc] = vo.vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc, seed=seed).value
         limit[nc] = vo.vo_line(gb, radius=radius, samples=LIMIT_LINES, normal_clamp=nc, randomize=False)
         ref_noise[nc] = None
         if noise:
             # two independent references: the RMS of their difference / sqrt(2) is one's noise
-            other = vo.vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc, seed=seed + 1)
+            other = vo.vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc,
+                                    seed=seed + 1).value
             ref_noise[nc] = vo.error(reference[nc], other).rmse / math.sqrt(2.0)
     return _Setup(gb, radius, reference, limit, ref_noise)
 
