@@ -25,6 +25,37 @@ class GBuffer:
     the screen-space inputs never pays for world-space images (and the ground truth reads
     the per-hit data directly, see :attr:`hits`).
 
+    The constructor stores what it is given after converting the dtypes; it does not check
+    the conventions below, which :func:`render_gbuffer` guarantees. Construct one directly
+    only to wrap buffers from elsewhere (e.g. a rasterizer) that keep them.
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera the view was rendered with: it defines view space (x right, y up, z the
+        depth, positive in front of the camera), the pixel grid (H = ``camera.height`` rows,
+        W = ``camera.width`` columns, pixel (i, j) centred at (x, y) = (j + 0.5, i + 0.5)) and
+        the projection (perspective or orthographic) that the screen-space estimators invert.
+    depth : (H, W) array_like of float
+        Linear view depth z of the surface seen through each pixel centre (view-space z, not
+        the distance along the ray), > 0 in front of the camera; +inf on background.
+        Converted to ``dtype``.
+    normal : (H, W, 3) array_like of float
+        View-space unit normal of that surface, flipped to face the camera, so n_z < 0 (it
+        points back towards the eye, against +z; ``docs/conventions.md``); (0, 0, 0) on
+        background. Converted to ``dtype``.
+    valid : (H, W) array_like of bool
+        True where a surface was hit (finite depth), False on background.
+    primitive : (H, W) array_like of int
+        Index of the hit triangle in ``scene.triangles``, -1 on background; stored as int64.
+    hits : dict or callable
+        The per-hit world-space data of :attr:`hits` (``index`` (k,) flat row-major indices
+        of the valid pixels; (k, 3) float64 ``world_position``, ``world_normal``,
+        ``world_geometric_normal``), or a function of no arguments returning that dict,
+        called on first access.
+    dtype : numpy dtype, optional
+        dtype of the float images, float64 (default) or float32 (see :meth:`astype`).
+
     Attributes
     ----------
     depth : (H, W) float

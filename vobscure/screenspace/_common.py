@@ -1,13 +1,18 @@
 """Pieces every screen-space estimator shares, each in one place.
 
-- :func:`prepare`: validation of the G-buffer and the common arguments, and the per-pixel
-  quantities (view position p, normal n, projected radius in pixels) of the valid pixels.
+- :func:`frame` / :func:`check_common`: validation of the G-buffer and the common arguments.
+- :func:`prepare`: the per-pixel quantities (view position p, normal n, projected radius in
+  pixels) of the valid pixels.
 - :func:`run_chunks`: evaluation over chunks of pixels, so memory follows the chunk.
 - :func:`disk_pixels` / :func:`nearest_taps`: disk offsets to pixels (and the nearest taps).
 - :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
 - :func:`noise_texture` / :func:`noise_at`: the small tiled random texture that randomizes
   patterns per pixel.
 - :func:`warp`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
+- :func:`tangent_plane_line`: the tangent plane's line coordinate (Loos & Sloan 2010, Sec. 4.4).
+
+Used by the modules of :mod:`vobscure.screenspace` only (tests and benchmarks also reach in);
+the estimators' public arguments are documented on the estimators.
 
 Conventions (``docs/conventions.md``): view space, z = depth > 0 in front; continuous pixel
 coordinates (x, y) with pixel (i, j) centred at (j + 0.5, i + 0.5). NaN depths are treated
@@ -99,6 +104,7 @@ class Pixels:
 
 
 def as_gbuffer(gbuffer) -> GBuffer:
+    """``gbuffer`` itself if it is a :class:`~vobscure.GBuffer`; ValueError otherwise."""
     if not isinstance(gbuffer, GBuffer):
         raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
     return gbuffer
@@ -181,6 +187,12 @@ def _default_pattern(n: int, dim: int) -> SamplePattern:
 
 def check_common(*, fetch="nearest", offscreen="clamp", falloff="constant", thickness=None,
                  noise_size=NOISE_SIZE):
+    """Validate the estimators' shared arguments (ValueError naming the argument).
+
+    ``fetch`` in :data:`FETCHES`, ``offscreen`` in :data:`OFFSCREEN`, ``falloff`` in
+    :data:`FALLOFFS`, ``thickness`` None or a positive finite number, ``noise_size`` an
+    int >= 1. Returns ``thickness`` as a float (or None).
+    """
     check_choice(fetch, "fetch", FETCHES)
     check_choice(offscreen, "offscreen", OFFSCREEN)
     check_choice(falloff, "falloff", FALLOFFS)
@@ -432,12 +444,16 @@ def warper(px: Pixels, radius: float):
     """:func:`warp` for these pixels as a one-argument function, constants precomputed."""
     z = px.z
     if px.perspective:
+        # d_r = (z_p / R) (1 - z_p / d) = a - b / d (docs/screenspace.md, "Where vobscure
+        # departs from the paper", 1)
         a, b = z / radius, z * z / radius
 
         def f(depth):
             with np.errstate(divide="ignore"):
                 return a - b / depth
         return f
+    # Loos & Sloan 2010, Sec. 4.1: the depth "mapped into the unit sphere's coordinate
+    # system", d_r = (d - z_p) / R
     return lambda depth: (depth - z) / radius
 
 
@@ -451,6 +467,8 @@ def tangent_plane_coefficients(px: Pixels) -> tuple[np.ndarray, np.ndarray]:
     # gathered rows, then one transposing copy: the arithmetic below runs on contiguous
     # components (strided (k, 3) columns make every pass slower)
     nx, ny, nz = np.take(px.normal_image, px.index, axis=0).T.astype(np.float64, order="C")
+    # Loos & Sloan 2010, Sec. 4.4 and footnote 4: the plane n . (x - p) = 0 in the sphere's
+    # frame; its line coordinate at disk offset (x, y) is -(n_x x + n_y y) / den
     if px.perspective:
         # n . p / z_p, with p / z_p = (x / z, y / z, 1) the pixel's ray (Pixels.ray)
         rx, ry = px.ray

@@ -1,17 +1,18 @@
-"""Area sampling of Volumetric Obscurance (Loos & Sloan 2010, Sec. 4.2, 4.3, 4.4).
+"""Area sampling of Volumetric Obscurance (Loos & Sloan 2010, Sec. 4.2, 4.3, 4.4, 4.5).
 
 Each disk sample stands for its Voronoi region of the disk. Over the screen area the region
 covers, the depth buffer is summarized by the mean and variance of its depth (the first two
 moments, filtered in a mip-map as in Variance Shadow Maps); the occupancy along the sample's
-line is then no longer a step at one depth but the probability that the surface lies behind
-each point of the line, and its integral over the sphere's segment has a closed form.
+line is then the probability that the surface lies behind each point of the line, instead of
+a step at one depth, and its integral over the sphere's chord has a closed form.
+
+The paper does not number its equations; they are cited by section and content (the list is
+in ``docs/screenspace.md``, "How the paper is cited").
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
-
-from functools import partial
+from functools import lru_cache, partial
 
 import numpy as np
 from scipy import ndimage, special
@@ -20,7 +21,7 @@ from scipy.spatial import cKDTree
 from .._validate import as_array, check_choice
 from ..patterns import DISK_GRID, SamplePattern, _grid
 from . import _common as C
-from .line import _falloff_integral
+from .line import falloff_integral
 
 __all__ = ["vo_area", "area_integral", "region_areas", "MODELS", "RECONSTRUCTIONS"]
 
@@ -147,7 +148,7 @@ def _visible_integral(lo, hi, mu, sigma, z_s, model, falloff):
     # in front of the distribution v = 1: V_c(z_min, z_max) = z_max - z_min (Sec. 4.2; rho's
     # integral for the quadratic falloff). With a step (sigma -> 0) this is all there is:
     # the line integral max(min(z_s, d_r) + z_s, 0) of Sec. 4.1.
-    out = np.array(_falloff_integral(lo, z0, z_s, falloff), dtype=np.float64)
+    out = np.array(falloff_integral(lo, z0, z_s, falloff=falloff), dtype=np.float64)
     ramp = ~step & (z1 > z0)
     if np.any(ramp):
         args = (z0[ramp], z1[ramp], mu[ramp], s[ramp], z_s[ramp], falloff)
@@ -166,36 +167,77 @@ def area_integral(lo, hi, mu, sigma, z_s, *, model: str = "box", falloff: str = 
     With the thickness model (Sec. 4.3) the back of the surface is distributed with
     ``mu_back``, ``sigma_back`` and z is also unoccupied behind it: the integral is computed
     twice, "once with the usual visibility function, and again with 1 - visibility function
-    shifted back", and summed. As sigma -> 0 this is :func:`vobscure.screenspace.line.line_integral`.
+    shifted back", and summed. As sigma -> 0 this is
+    :func:`vobscure.screenspace.line.line_integral`.
 
     Parameters
     ----------
-    lo, hi : array_like
-        Segment ends (hi < lo means empty).
-    mu, sigma : array_like
-        Finite mean and standard deviation (>= 0) of the surface depth.
-    z_s : array_like
-        Half-length of the sphere's full segment (for the quadratic falloff rho = z_s^2 - z^2).
-    model : {"box", "gaussian"}
-    falloff : {"constant", "quadratic"}
-    mu_back, sigma_back : array_like, optional
-        The back surface's distribution; None: no thickness model.
+    lo, hi : float or array_like
+        Segment ends in line coordinates of the unit sphere (hi < lo means empty: both
+        integrals 0); broadcast with the other arrays.
+    mu, sigma : float or array_like
+        Finite mean and standard deviation (>= 0) of the surface depth along the line, in
+        line coordinates. sigma below ``SIGMA_STEP`` (1e-9, or NaN) is treated as a step at
+        mu: the line integral of Sec. 4.1.
+    z_s : float or array_like
+        Half-length of the line's chord in the unit sphere, z_s = sqrt(1 - x^2 - y^2); only
+        the quadratic falloff rho = z_s^2 - z^2 uses it.
+    model : {"box", "gaussian"}, optional
+        Distribution of the depth: ``"box"`` (default, the paper's Sec. 4.2) or
+        ``"gaussian"`` (integrated in closed form; footnote 3).
+    falloff : {"constant", "quadratic"}, optional
+        The falloff rho along the line (default ``"constant"``), as in
+        :func:`vobscure.screenspace.line.falloff_integral`.
+    mu_back, sigma_back : float or array_like, optional
+        Mean and standard deviation of the back of the surface (thickness model, Sec. 4.3),
+        in line coordinates; default None: no thickness model (everything behind the
+        surface is occupied). Give both or neither.
 
     Returns
     -------
     unoccupied, total : ndarray
+        Integral of rho v (plus rho (1 - v_back) with the thickness model) over [lo, hi],
+        and of rho over [lo, hi]; float64, of the broadcast shape of the inputs.
+
+    Raises
+    ------
+    ValueError
+        If ``model`` or ``falloff`` is not one of its values.
+
+    Notes
+    -----
+    Box: v = 1 in front of mu - sigma, the ramp v(z) = a z + b on [mu - sigma, mu + sigma]
+    with a = -1 / (2 sigma), b = -a (mu + sigma), 0 beyond; the integral of rho v is the
+    paper's V_c(z_min, z_max) on the constant part plus V_c(z_0, z_1, a, b) on the ramp
+    (quadratic falloff: 2-point Gauss-Legendre, exact for the cubic rho v). Gaussian:
+    v(z) = erfc((z - mu) / (sigma sqrt 2)) / 2, integrated through the antiderivatives of
+    x^n erfc(x), n <= 2; intervals narrower than ``GAUSS_NARROW`` in x use 8-point
+    Gauss-Legendre quadrature (the differences of antiderivatives would cancel).
+
+    References
+    ----------
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010: Sec. 4.2 (the box model and the
+    integrals V_c(z_min, z_max) = z_max - z_min and
+    V_c(z_0, z_1, a, b) = a (z_1^2 - z_0^2) / 2 + b (z_1 - z_0)), footnote 3 (the Gaussian),
+    Sec. 4.3 (thickness). Ng & Geller, "A table of integrals of the error functions",
+    J. Res. NBS 73B (1969).
 
     Examples
     --------
-    >>> u, t = area_integral(-1.0, 1.0, 0.0, 0.5, 1.0)   # a box centred on the point
+    A box centred on the sphere's centre leaves half of the centre chord open; with sigma
+    0 it is the line integral of Sec. 4.1:
+
+    >>> u, t = area_integral(-1.0, 1.0, 0.0, 0.5, 1.0)
     >>> float(u), float(t)
     (1.0, 2.0)
+    >>> float(area_integral(-1.0, 1.0, 0.25, 0.0, 1.0)[0])
+    1.25
     """
     check_choice(model, "model", MODELS)
     check_choice(falloff, "falloff", C.FALLOFFS)
     lo = np.asarray(lo, dtype=np.float64)
     hi = np.maximum(np.asarray(hi, dtype=np.float64), lo)
-    total = _falloff_integral(lo, hi, z_s, falloff)
+    total = falloff_integral(lo, hi, z_s, falloff=falloff)
     unocc = _visible_integral(lo, hi, mu, sigma, z_s, model, falloff)
     if mu_back is not None:
         # + int rho (1 - v_back): what lies behind the surface's back is empty (Sec. 4.3)
@@ -218,7 +260,39 @@ def _region_areas_cached(key: bytes, n: int) -> np.ndarray:
 
 
 def region_areas(pattern: SamplePattern) -> np.ndarray:
-    """Areas (n,) of the samples' Voronoi regions in the unit disk (sum pi), discrete as in Sec. 4.5."""
+    """Areas of the samples' Voronoi regions in the unit disk: the a_i of :func:`vo_area`.
+
+    The regions are discrete, as in Loos & Sloan 2010, Sec. 4.5: the cells of a
+    ``DISK_GRID`` x ``DISK_GRID`` grid over [-1, 1]^2 whose centres lie in the unit disk are
+    assigned to their nearest sample. A single sample owns the whole disk, pi exactly.
+    Results are cached per pattern (the points' bytes); a copy is returned.
+
+    Parameters
+    ----------
+    pattern : SamplePattern
+        A disk pattern, (n, 2) ``points`` in the unit disk.
+
+    Returns
+    -------
+    (n,) ndarray of float64
+        The areas, summing to about pi; each at least one grid cell, (2 / DISK_GRID)^2,
+        also for a region no cell centre falls into (coincident points).
+
+    References
+    ----------
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.2 ("the logs for the fractional
+    area covered by a sample are precomputed") and Sec. 4.5 (discrete Voronoi regions).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vobscure.patterns import disk
+    >>> bool(np.isclose(region_areas(disk(1))[0], np.pi))
+    True
+    >>> a = region_areas(disk(5))
+    >>> a.shape, bool(abs(a.sum() - np.pi) < 0.01)
+    ((5,), True)
+    """
     return _region_areas_cached(np.ascontiguousarray(pattern.points).tobytes(), pattern.n).copy()
 
 
@@ -491,132 +565,141 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     of area a_i (pi for a single sample: the whole disk). The depth buffer's mean mu and
     standard deviation sigma over the region's screen footprint (a_i R_px^2 pixels) are read
     from a mip-map of the depth's first two moments (as in Variance Shadow Maps) at the
-    level of detail lod = log2(R_px) + log2(a_i) / 2, filtered at the region's centre.
-    The occupancy along the line at (x, y) is then smooth: a point of the segment
-    [-z_s, z_s] is unoccupied with the probability v(z) that the surface lies behind it,
-    and the segment's unoccupied integral is analytic. Segments are combined as in
-    :func:`vobscure.vo_line`, with the pattern's footnote-5 weights.
+    level of detail lod = log2(R_px) + log2(a_i) / 2 - ``lod_bias``, filtered at the
+    region's centre. The occupancy along the line at (x, y) is then smooth: a point z of
+    the chord [-z_s, z_s] is unoccupied with the probability v(z) that the surface lies
+    behind it, and the chord's unoccupied integral is analytic (:func:`area_integral`).
+    The chords are combined as in :func:`vobscure.vo_line`, with the pattern's footnote-5
+    weights in ratio form.
 
     Parameters
     ----------
     gbuffer : GBuffer
+        The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
+        normals (H, W, 3) (facing the camera, n_z < 0), from
+        :func:`vobscure.render_gbuffer`; perspective or orthographic camera. The normals
+        are read only with ``normal_clamp``.
     radius : float
-        Ball radius in world units.
-    samples : int or SamplePattern
-        Disk pattern, or a count for the default point-symmetric pattern
-        (:func:`vobscure.patterns.disk`); 1 is the centre alone, i.e. the whole disk as one
-        area sample, the paper's single-sample method.
-    normal_clamp : bool
-        Clip every segment at the tangent plane (Sec. 4.4); the depth distribution is then
-        that of the surface relative to the tangent plane (see Notes). A flat surface
-        reads 1.
+        Radius R of the ball around each pixel's point, in world units (> 0).
+    samples : int or SamplePattern, optional
+        The disk pattern: a count n >= 1 for the default point-symmetric pattern
+        ``vobscure.patterns.disk(n)``, or a :class:`~vobscure.patterns.SamplePattern` with
+        (n, 2) ``points`` in the unit disk and (n,) footnote-5 ``weights``. Default 1: the
+        centre alone, i.e. the whole disk as one area sample, the paper's single-sample
+        method.
+    normal_clamp : bool, optional
+        Clip every chord at the tangent plane (Sec. 4.4); the depth distribution is then
+        that of the surface relative to the tangent plane (see Notes). A flat surface reads
+        1 instead of 0.5. Default False.
     thickness : float, optional
-        Thickness model (Sec. 4.3): the surface occupies only this world thickness.
-    falloff : {"constant", "quadratic"}
-        rho = 1, or rho = 1 - r^2 = z_s^2 - z^2 along the line.
-    model : {"box", "gaussian"}
-        The depth distribution over an area sample: ``"box"`` (the paper's): uniform on
-        [mu - sigma, mu + sigma], whose integrated visibility is linear on that interval
-        (Sec. 4.2, Fig. 3); ``"gaussian"``: normal N(mu, sigma^2), visibility
-        erfc((z - mu) / (sigma sqrt 2)) / 2 (integrated in closed form, footnote 3).
-    reconstruction : {"bspline", "trilinear"}
-        How the mip-map is read between texel centres and levels. ``"trilinear"`` is the
-        paper's (GPU hardware filtering: bilinear in two levels, linear between them).
-        ``"bspline"`` (default) weights 3 x 3 texels per level by a quadratic B-spline,
-        whose spread does not depend on the sub-texel position: see Notes.
-    prefilter : bool
-        Gaussian blur (sigma = ``PREFILTER_SIGMA`` px, coverage-weighted) of the finest
-        level before the mip chain, against reconstruction artifacts (Sec. 4.2).
+        Thickness model (Sec. 4.3): the surface occupies only this world thickness (> 0)
+        behind the depth buffer. Default None: everything behind it is solid.
+    falloff : {"constant", "quadratic"}, optional
+        The falloff rho: ``"constant"`` (default, the paper's choice) or ``"quadratic"``,
+        rho = 1 - r^2 = z_s^2 - z^2 along the line
+        (:func:`vobscure.screenspace.line.falloff_integral`).
+    model : {"box", "gaussian"}, optional
+        The depth distribution over an area sample. ``"box"`` (default, the paper's):
+        uniform on [mu - sigma, mu + sigma], whose integrated visibility is linear on that
+        interval (Sec. 4.2, Fig. 3). ``"gaussian"``: normal N(mu, sigma^2), visibility
+        erfc((z - mu) / (sigma sqrt 2)) / 2, integrated in closed form (footnote 3).
+    reconstruction : {"bspline", "trilinear"}, optional
+        How the mip-map is read between texel centres and levels. ``"bspline"`` (default):
+        3 x 3 texels per level weighted by a quadratic B-spline, whose spread does not
+        depend on the sub-texel position (Notes). ``"trilinear"``: the paper's GPU hardware
+        filtering, bilinear in two levels and linear between them.
+    prefilter : bool, optional
+        Blur the finest level with a coverage-weighted Gaussian (sigma =
+        ``PREFILTER_SIGMA`` = 1 px) before the mip chain is built, against reconstruction
+        artifacts (Sec. 4.2). Default False.
     lod_bias : float, optional
         Levels subtracted from log2 of a region's footprint side when choosing the mip
-        level; default ``LOD_BIAS[reconstruction]`` (1 for the B-spline: its footprint then
-        has the region's second moments; 0 for the trilinear tent, the paper's rule).
-        Larger is finer. Planes stay exact whatever the value; elsewhere the best value
-        depends on the scene (``docs/screenspace.md``, "Level of detail": 1.5 halves the
-        one-sample error on the Cornell box but doubles it on the orthographic crease).
-    randomize : bool
-        Reflect the pattern about a random 2-D direction per pixel (Sec. 4.5).
-    seed : int, Generator or None
-    offscreen : {"clamp", "open"}
-        Footprints off the image read the border texels, or empty space.
-    noise_size : int
+        level; larger is finer. Default None: ``LOD_BIAS[reconstruction]``, 1 for the
+        B-spline (its footprint then has the region's second moments), 0 for the trilinear
+        tent (the paper's rule). Planes stay exact whatever the value; elsewhere the best
+        value depends on the scene (``docs/screenspace.md``, "Level of detail").
+    randomize : bool, optional
+        Reflect the pattern per pixel about a random 2-D direction (Sec. 4.5), read from a
+        tiled ``noise_size`` x ``noise_size`` texture of unit vectors. Default True; False
+        uses the pattern as given at every pixel (``seed`` is then unused).
+    seed : int, numpy.random.Generator or None, optional
+        Seed of the random texture (default 0), converted once: an int >= 0 or None
+        (fresh OS entropy) goes through ``numpy.random.default_rng``, a Generator is used
+        as is. The same int gives the same image.
+    offscreen : {"clamp", "open"}, optional
+        Footprints off the image read the border texels (``"clamp"``, default: the mip
+        levels are padded by edge replication) or empty space (``"open"``).
+    noise_size : int, optional
+        Edge of the tiled random texture in pixels (>= 1, default
+        ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
+        (i mod noise_size, j mod noise_size). Unused without ``randomize``.
 
     Returns
     -------
     (H, W) ndarray
-        Visibility (1 = open), NaN on background; float32 for a float32 G-buffer.
+        Visibility in [0, 1] (1 = open), NaN on background; float32 for a float32
+        G-buffer, float64 otherwise (accumulated in float64).
+
+    Raises
+    ------
+    ValueError
+        If ``gbuffer`` is not a GBuffer, ``radius`` or ``thickness`` is not a positive
+        finite number, ``samples`` is neither a count >= 1 nor a disk pattern, ``lod_bias``
+        is not a finite scalar, ``seed`` or ``noise_size`` is invalid, or a choice argument
+        is not one of its values; the message names the argument.
 
     Notes
     -----
-    The quantity mipped is the one the line coordinate is affine in: 1/z under a
-    perspective camera, where the projective warp of
-    :func:`vobscure.screenspace._common.warp` is d_r = (z_p / R) (1 - z_p / d), so that
-    mu_r = (z_p / R) (1 - z_p mu_w) and sigma_r = (z_p^2 / R) sigma_w exactly; z under an
-    orthographic camera (mu_r = (mu - z_p) / R, sigma_r = sigma / R). 1/z is affine across
-    the screen on a plane, so its box averages and their bilinear interpolation are exact
-    there: on a plane, mu_r is the plane itself and only sigma_r (the plane's spread over
-    the footprint) differs from zero.
+    The derivations and measurements are in ``docs/screenspace.md`` ("Area sampling"); in
+    short:
 
-    That spread is not small (sigma_r ~ 0.5 for the whole disk of a plane tilted by 45
-    degrees), and with the paper's trilinear filtering it depends on where the sample
-    falls between texel centres (the tent's weights u (1 - u) add up to h^2 / 4 to the
-    variance of a linear field): the two samples of an antipodal pair then see different
-    sigmas, and a tilted plane reads 0.5 only to ~6e-3 (5 or 9 samples; measured on the
-    slab, 64 x 48). The quadratic B-spline's weights have a constant spread (1/4 texel^2),
-    so on a plane sigma depends only on the level of detail, antipodal samples agree and
-    point-symmetric patterns read 0.5 exactly; it also removes the blocky trilinear
-    artifacts. Its footprint at level L has the second moments of a square of side
-    2^(L+1), hence ``LOD_BIAS``: the level is chosen one finer.
+    *What is mipped.* The quantity q the line coordinate is affine in: q = 1/z under a
+    perspective camera, where the projective warp is d_r = (z_p / R) (1 - z_p q), so that
+    mu_r = (z_p / R) (1 - z_p E[q]) and sigma_r = (z_p^2 / R) sd[q]; q = z under an
+    orthographic camera (mu_r = (E[z] - z_p) / R, sigma_r = sd[z] / R). On a plane q is
+    affine across the screen, so its box averages and their interpolation are exact and
+    mu_r is the plane itself. Each texel holds the coverage (fraction of finite pixels) and
+    the mean and central second moment of q over the finite pixels (the paper's
+    M1 = E[z], M2 = E[z^2], sigma^2 = M2 - M1^2, combined by the parallel-variance update
+    of Chan et al. instead of the raw M2 - M1^2). The uncovered share of a footprint is
+    empty space: the unoccupied integral is coverage x U + (1 - coverage) x total.
 
-    Background: the mip-map carries the fraction of finite pixels (coverage); moments are
-    over those only. The uncovered share of a footprint is empty space, so a segment's
-    unoccupied integral is ``coverage * U + (1 - coverage) * total``; a footprint with no
-    coverage is open, as a background tap is in line sampling.
+    *Reconstruction.* On a tilted plane sigma_r is not small, and the tent of trilinear
+    filtering adds u (1 - u) h^2 to the variance of a linear field, u the sub-texel
+    position: the two samples of an antipodal pair see different sigmas and a plane reads
+    0.5 only to about 5e-3. The B-spline's spread is constant, so point-symmetric patterns
+    read 0.5 on planes up to the G-buffer's rounding. Its footprint at level L has the
+    second moments of a square of side 2^(L+1), hence ``LOD_BIAS["bspline"] = 1``.
 
-    The box of Loos & Sloan has half-width sigma (a = -1 / (2 sigma)), i.e. the standard
-    deviation sigma / sqrt(3); it is kept as the paper writes it. With the thickness model,
-    the back surface is the front one moved back by ``thickness`` in depth: mean through
-    the warp of (mean depth + thickness), standard deviation scaled by the warp's
-    derivative there (1 / (1 + t mu_w)^2 for 1/z; unchanged orthographically). Two
-    caveats: under perspective the warp shortens a thickness (t at depth d spans
-    (z_p^2 / R) t / (d (d + t)) line units, less than t / R behind p) and the back's
-    spread is linearized at the mean; the Gaussian's back has unbounded tails (on the slab
-    at 48 degrees, t = 2 R moves the unclamped Gaussian estimate by 1e-3 under perspective,
-    2e-5 orthographically). t >= 2 R is guaranteed to change nothing only for the box
-    under an orthographic camera, where the surface is not far in front of the ball.
+    *Box model.* The box of Sec. 4.2 has half-width sigma (a = -1 / (2 sigma)), i.e. the
+    standard deviation sigma / sqrt(3); it is kept as the paper writes it.
 
-    With ``normal_clamp`` (Sec. 4.4) the segment is clipped at the tangent plane's value
-    t(x, y) at the sample, and the depth distribution is not the raw depth's over the
-    footprint but that of the surface measured from the tangent plane, placed at the clip
-    point: mean t(x, y) + E[r], standard deviation sd[r], r the surface's line coordinate
-    minus the plane's along each line of the footprint. Inside a clipped segment occupancy
-    depends on r only (min(t, t + r) = t + min(0, r)); the plane's tilt across the
-    footprint moves clip point and surface together. On a plane r = 0, a point mass at the
-    clip point: a plane reads 1 exactly (measured 7e-6 from 1, the G-buffer's rounding,
-    on the slab at 48 degrees, both cameras, radii 0.05 and 0.3, 1 to 9 samples, both
-    models, whichever reconstruction). The raw depth would spread around t(x, y) by the
-    tilt (sigma_r ~ 0.5 over the whole disk of a 45-degree plane) and count its front
-    half as occupied: a plane read 0.756-0.952. The moments of r come from the same mip-map,
-    which then also carries the pixel positions X, Y and the central moments of (q, X, Y)
-    (``_Pyramid``, ``positions=True``): r in q is q - q_plane(X, Y), affine in (q, X, Y),
-    so its mean and variance over any texel are exact linear and quadratic forms of them.
-    Off the image (``offscreen="clamp"``) the border's r is replicated: the surface goes on
-    along the tangent plane. Measured against ``vo_reference(normal_clamp=True)`` (2048
-    samples) on the orthographic crease, R = 1, box / Gaussian RMSE: 1 sample 0.079 /
-    0.109 (the raw depth: 0.063 / 0.092), 5: 0.034 / 0.040 (0.058 / 0.080), 9: 0.044 /
-    0.048 (0.063 / 0.080), 33: 0.021 / 0.021 (0.023 / 0.033). One sample is worse: its
-    footprint mixes r = 0 (floor) with the wall far in front of the plane, and two moments
-    of that bimodal distribution put a symmetric box or Gaussian across the segment.
+    *Thickness.* The back surface is the front one moved back by ``thickness`` in depth:
+    mean through the warp of (mean depth + thickness), standard deviation scaled by the
+    warp's slope there. Under perspective the warp shortens a thickness, and the Gaussian's
+    back has unbounded tails, so only the box under an orthographic camera is unchanged by
+    any t >= 2R.
 
-    Depth-buffer taps per pixel and sample: 18 texels (B-spline) or 8 (trilinear) of 3
+    *Normal clamping.* The chord is clipped at the tangent plane's value t(x, y) at the
+    sample, and the depth distribution used is that of t(x, y) + r over the footprint, r
+    the surface's line coordinate minus the plane's along each line: inside a clipped
+    chord, occupancy depends on r only (min(t, t + r) = t + min(0, r)). On a plane r = 0,
+    so a plane reads 1 at any tilt. The moments of r come from the same mip-map, which then
+    also carries the pixel positions X, Y and the central moments of (q, X, Y).
+
+    Depth-buffer reads per pixel and sample: 18 texels (B-spline) or 8 (trilinear) of 3
     channels (10 with ``normal_clamp``), independent of the radius, after building the
-    mip-map (4/3 of the image, 3 or 10 channels).
+    mip-map (4/3 of the image).
 
     References
     ----------
-    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.2 (area sampling, the V_c
-    integrals), footnote 3 (the Gaussian), 4.3 (thickness), 4.4 (normal), 4.5 and
-    footnote 5 (patterns and weights).
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010: Sec. 4.2 (area sampling: the moments
+    M1 = E[z], M2 = E[z^2], sigma^2 = M2 - M1^2; the box's a = -1 / (2 sigma),
+    b = -a (mu + sigma); the integrals V_c(z_min, z_max) = z_max - z_min and
+    V_c(z_0, z_1, a, b) = a (z_1^2 - z_0^2) / 2 + b (z_1 - z_0); the LOD from one log2 per
+    pixel plus precomputed per-sample logs), footnote 3 (the Gaussian), Sec. 4.3
+    (thickness), Sec. 4.4 and footnote 4 (the tangent plane), Sec. 4.5 and footnote 5
+    (randomization, patterns and weights).
     Donnelly & Lauritzen, "Variance Shadow Maps", I3D 2006 (filtering the first two
     moments of depth).
     The antiderivative int erfc(x) dx = x erfc(x) - exp(-x^2) / sqrt(pi) (and those of
@@ -627,12 +710,15 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
 
     Examples
     --------
+    One area sample on a plane reads 1/2 (1 with the normal):
+
     >>> import vobscure as vo
     >>> cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(8, 8), fov_y=40)
     >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam)
     >>> v = vo.vo_area(gb, radius=0.3)
-    >>> round(float(v[4, 4]), 6)
-    0.5
+    >>> w = vo.vo_area(gb, radius=0.3, normal_clamp=True)
+    >>> round(float(v[4, 4]), 6), round(float(w[4, 4]), 6)
+    (0.5, 1.0)
     """
     gb, depth64, index = C.frame(gbuffer, radius)
     radius = float(radius)
@@ -670,36 +756,22 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
     z_p = px.z
     slope = None
     if normal_clamp:
-        # Sec. 4.4 for an area sample: the surface measured from the tangent plane.
-        # Clamped, the line at disk offset (u, v) keeps the segment [-z_s, t] up to the
-        # tangent plane, t(u, v) = a u + b v in line coordinates (footnote 4), and finds
-        # [-z_s, min(t, d, z_s)] of it unoccupied, d the surface's line coordinate there.
-        # With d = t + r, min(t, d) = t + min(0, r): inside the clipped segment occupancy
-        # depends on r, the surface relative to the plane along the line, and not on the
-        # plane's tilt, which moves the clip point and the surface together. One line, at
-        # the region's centre (x, y), stands for the whole region: its clip point is
-        # t(x, y), so the distribution it needs is that of t(x, y) + r over the footprint.
-        # The raw depth's distribution is instead mostly the plane's tilt across the
-        # footprint (sigma_r ~ 0.5 over the whole disk of a 45-degree plane), spread
-        # around t(x, y), and the half in front of the clip point counts as occupied: a
-        # plane read 0.756-0.952 instead of 1. On a plane r = 0 at every pixel, a point mass
-        # at the clip point: the clipped segment is all unoccupied, a plane reads 1 at
-        # any tilt, pattern, level of detail and reconstruction (up to the G-buffer's
-        # rounding). Where the surface leaves the plane (a crease, a step), r has mean
-        # and spread, and only that is treated as the depth's spread over the footprint.
-        # In the mipped quantity q the tangent plane is affine in pixel coordinates
-        # (1/z on a plane under perspective, z orthographic) and the warp is affine in q,
-        # so r = (dd_r/dq) (q - q_plane) and t(x, y) + r is the warp of
-        # q - g . ((X, Y) - (x, y)): each pixel's depth carried along the plane to the
-        # sample's line. g is the plane's gradient in q per pixel: with X = X_p + R_px u,
-        # Y = Y_p - R_px v (rows down), g = (dq/dd_r) (a, -b) / R_px, dq/dd_r = -R / z_p^2
-        # (perspective) or R (orthographic). _Pyramid.lookup(slope=g) returns the moments
-        # of that quantity, exactly, from the mipped moments of (q, X, Y).
+        # Sec. 4.4 for an area sample (derived in docs/screenspace.md, "Normal clamping"):
+        # the line at disk offset (u, v) is clipped at the tangent plane's line coordinate
+        # t(u, v) = a u + b v (footnote 4), and occupancy inside the clipped segment
+        # depends only on r = d_r - t, the surface measured from the plane. The sample's
+        # line at the region's centre (x, y) therefore gets the distribution of
+        # t(x, y) + r over the footprint, i.e. the moments of q - g . ((X, Y) - (x, y)):
+        # each pixel's q carried along the plane to the line. g is the plane's gradient in
+        # q per pixel: with X = X_p + R_px u, Y = Y_p - R_px v (rows down),
+        # g = (dq/dd_r) (a, -b) / R_px, dq/dd_r = -R / z_p^2 (perspective) or R
+        # (orthographic). _Pyramid.lookup(slope=g) returns those moments exactly.
         a, b = C.tangent_plane_coefficients(px)      # t(u, v) = a u + b v, unclipped
         dq = (-radius / (z_p * z_p) if px.perspective else radius) / px.radius_px
         slope = (dq * a, -dq * b)
 
-    # Step 2: one log2 per pixel; the regions' log2 areas are per-sample constants (Sec. 4.2)
+    # Step 2: "only a single log2 has to be computed" per pixel; the regions' log2 areas
+    # are per-sample constants (Loos & Sloan 2010, Sec. 4.2)
     log_r = np.log2(np.maximum(px.radius_px, np.finfo(np.float64).tiny))
     q_p = 1.0 / z_p if px.perspective else z_p
     noise = C.noise_at(px, texture)
@@ -707,16 +779,16 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
     den = np.zeros(k)
     for s, w, hla in zip(pattern.points, pattern.weights, half_log_area):
         x, y, xy = C.disk_pixels(px, C.reflect(s, noise, k), snap=False)
-        z_s = np.sqrt(np.maximum(0.0, 1.0 - np.einsum("ij,ij->i", xy, xy)))
-        # lod = log2 of the footprint's side: log2(R_px) + log2(a_i) / 2
+        z_s = np.sqrt(np.maximum(0.0, 1.0 - np.einsum("ij,ij->i", xy, xy)))   # Sec. 4.1
+        # Sec. 4.2: lod = log2 of the footprint's side, log2(R_px) + log2(a_i) / 2, minus the bias
         lod = np.clip(log_r + hla - lod_bias, 0.0, pyramid.top)
-        # Step 3: the filtered moments at the region's centre; clamped, of the depth
-        # carried along the tangent plane to this line (see ``slope`` above)
-        # accumulated about the pixel's own q (carried along the tangent plane when clamped)
+        # Step 3: the filtered moments M1, M2 (Sec. 4.2) at the region's centre; clamped, of
+        # the depth carried along the tangent plane to this line (see ``slope`` above).
+        # They are accumulated about the pixel's own q (carried along the plane when clamped)
         ref = q_p if slope is None else q_p + slope[0] * (x - px.center[:, 0]) + slope[1] * (y - px.center[:, 1])
         cov, mean, var = pyramid.lookup(x, y, lod, offscreen, reconstruction, slope=slope, ref=ref)
         sd = np.sqrt(var)
-        # Step 4: to the line coordinate (the warp is affine in the mipped quantity)
+        # Step 4: mu and sigma of Sec. 4.2 in the line coordinate (the warp is affine in q)
         if px.perspective:
             # q = 1/z >= 0. Carried along a steep tangent plane the mean can cross 0, the
             # plane's horizon: no surface on this line, as for background (q = 0: d_r = z_p / R).
@@ -740,14 +812,16 @@ def _area_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, model
                 mu_back = mu_r + thickness / radius
                 sigma_back = sigma_r
             mu_back = np.where(covered, mu_back, 3.0)
-        # Step 5: the segment (clipped at the tangent plane, Sec. 4.4) against the model
+        # Step 5: the segment (clipped at the tangent plane, Sec. 4.4) against the model:
+        # the V_c integrals of Sec. 4.2 (box) or the Gaussian's closed form (footnote 3)
         hi = np.minimum(z_s, C.tangent_plane_line(px, xy)) if normal_clamp else z_s
         unocc, total = area_integral(-z_s, hi, mu_r, sigma_r, z_s, model=model, falloff=falloff,
                                      mu_back=mu_back, sigma_back=sigma_back)
         # the footprint's uncovered share is empty space
         unocc = cov * unocc + (1.0 - cov) * total
-        # Step 6: footnote-5 weights, each segment normalized by its full length
-        full = _falloff_integral(-z_s, z_s, z_s, falloff)
+        # Step 6: footnote-5 weights, each segment normalized by its full integral
+        # N = int_{-z_s}^{z_s} rho
+        full = falloff_integral(-z_s, z_s, z_s, falloff=falloff)
         ok = full > 0
         safe = np.where(ok, full, 1.0)
         num += np.where(ok, w * unocc / safe, 0.0)

@@ -49,18 +49,21 @@ def bilateral_blur(visibility, gbuffer, *, radius_px=4, sigma_spatial=None, sigm
         The G-buffer ``visibility`` was computed from: ``depth`` (H, W), ``normal``
         (H, W, 3), ``valid`` (H, W).
     radius_px : int, optional
-        Half-width of the window in pixels (>= 0); 0 returns a copy (NaN on background).
+        Half-width r of the window in pixels (>= 0, default 4); 0 returns a copy (NaN on
+        background).
     sigma_spatial : float, optional
-        Standard deviation of the spatial Gaussian in pixels; default ``radius_px / 2``.
+        Standard deviation sigma_s of the spatial Gaussian in pixels (> 0); default None:
+        ``radius_px / 2``.
     sigma_depth : float, optional
-        Standard deviation of the depth term as a fraction of the centre pixel's depth
-        z_p: a neighbour 5% (the default) nearer or farther has depth weight exp(-1/2).
+        Standard deviation sigma_z of the depth term as a fraction of the centre pixel's
+        depth z_p (> 0, default 0.05): a neighbour 5% nearer or farther then has depth
+        weight exp(-1/2).
     sigma_normal : float, optional
-        Angular standard deviation of the normal term in radians (see Notes); default 0.2
-        (about 11.5 degrees).
+        Angular standard deviation sigma_n of the normal term in radians (> 0, see Notes);
+        default 0.2 (about 11.5 degrees).
     passes : {"separable", "full"}, optional
-        ``"separable"``: a horizontal then a vertical 1-D pass, each with the full bilateral
-        weight (2 (2r + 1) taps per pixel; the usual real-time approximation).
+        ``"separable"`` (default): a horizontal then a vertical 1-D pass, each with the full
+        bilateral weight (2 (2r + 1) taps per pixel; the usual real-time approximation).
         ``"full"``: the exact 2-D window ((2r + 1)^2 taps per pixel).
 
     Returns
@@ -234,7 +237,7 @@ def combine_radii(a, b, *, mode="product") -> np.ndarray:
         Visibility images of the same shape (any shape, as long as both agree), typically
         in [0, 1], with NaN on background.
     mode : {"product", "min"}, optional
-        ``"product"``: a * b (both darkenings apply); ``"min"``: the elementwise minimum
+        ``"product"`` (default): a * b (both darkenings apply); ``"min"``: the elementwise minimum
         (the stronger one wins). Keys of :data:`COMBINE_MODES`.
 
     Returns

@@ -1,4 +1,8 @@
-"""Line sampling of Volumetric Obscurance (Loos & Sloan 2010, Sec. 4.1, 4.3, 4.4)."""
+"""Line sampling of Volumetric Obscurance (Loos & Sloan 2010, Sec. 4.1, 4.3, 4.4, 4.5).
+
+The paper does not number its equations; they are cited by section and content (the list is
+in ``docs/screenspace.md``, "How the paper is cited").
+"""
 
 from __future__ import annotations
 
@@ -8,39 +12,117 @@ import numpy as np
 
 from . import _common as C
 
-__all__ = ["vo_line", "line_integral"]
+__all__ = ["vo_line", "line_integral", "falloff_integral"]
 
 
-def _falloff_integral(a, b, z_s, falloff):
-    """Integral of rho along the line over [a, b] (a <= b), in unit-sphere coordinates.
+def falloff_integral(a, b, z_s, *, falloff="constant"):
+    """Integral of the falloff rho along the line at a disk offset, over [a, b].
 
-    constant: rho = 1; quadratic: rho = 1 - r^2 = z_s^2 - z^2 on the line at disk offset
-    with z_s^2 = 1 - x^2 - y^2 (Loos & Sloan Sec. 4, the paper's second candidate).
+    Coordinates are those of the unit sphere around the pixel's point p: z along the line
+    through the disk point (x, y), whose chord is [-z_s, z_s] with z_s = sqrt(1 - x^2 - y^2)
+    (Loos & Sloan 2010, Sec. 4.1).
+
+    Parameters
+    ----------
+    a, b : float or array_like
+        Ends of the interval, in line coordinates; broadcast together. ``a <= b`` is the
+        caller's to ensure (for ``b < a`` the result is the negated integral over [b, a]).
+    z_s : float or array_like
+        Half-length of the line's chord in the unit sphere; used by the quadratic falloff
+        only, and broadcast with ``a`` and ``b``.
+    falloff : {"constant", "quadratic"}, optional
+        ``"constant"`` (default): rho = 1, the paper's choice (Sec. 4), so the integral is the
+        length b - a. ``"quadratic"``: rho = 1 - r^2 with r = |x - p| / R, the quadratic
+        falloff the paper mentions in Sec. 4; on the line r^2 = x^2 + y^2 + z^2, so
+        rho = z_s^2 - z^2 and the integral is z_s^2 (b - a) - (b^3 - a^3) / 3.
+        Not validated here (the estimators validate it).
+
+    Returns
+    -------
+    float or ndarray
+        The integral, of the broadcast shape of the inputs.
+
+    References
+    ----------
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4 (the falloff rho, constant or
+    quadratic) and Sec. 4.1 (z_s = sqrt(1 - x^2 - y^2)).
+
+    Examples
+    --------
+    The whole chord of the centre line (z_s = 1): its length 2 for rho = 1, and
+    int_{-1}^{1} (1 - z^2) dz = 4/3 for the quadratic falloff.
+
+    >>> falloff_integral(-1.0, 1.0, 1.0)
+    2.0
+    >>> round(falloff_integral(-1.0, 1.0, 1.0, falloff="quadratic"), 12)
+    1.333333333333
     """
     if falloff == "constant":
         return b - a
+    # int_a^b (z_s^2 - z^2) dz
     return z_s * z_s * (b - a) - (b ** 3 - a ** 3) / 3.0
 
 
 def line_integral(lo, hi, occ_lo, occ_hi, z_s, falloff="constant"):
     """Unoccupied and total integrals of rho along one line segment.
 
-    The segment [lo, hi] (hi < lo means empty) is occupied on [occ_lo, occ_hi]: from the
-    depth buffer's surface d_r to d_r + thickness (occ_hi = +inf without the thickness
-    model). For a constant rho and no thickness this is the paper's
-    max(min(z_s, d_r) + z_s, 0) (Loos & Sloan 2010, Sec. 4.1); the thickness model
-    (Sec. 4.3) adds back the part beyond the thickness ("the integral computed twice and
-    summed").
+    The segment [lo, hi] of the line is occupied on [occ_lo, occ_hi]: from the depth
+    buffer's surface d_r to the back of the surface (occ_hi = +inf without the thickness
+    model). For a constant rho, the whole chord [-z_s, z_s] and no thickness, the unoccupied
+    integral is the paper's line integral max(min(z_s, d_r) + z_s, 0) (Loos & Sloan 2010,
+    Sec. 4.1). With the thickness model (Sec. 4.3) the part behind occ_hi is unoccupied
+    again: the paper's "integral computed twice, once with the usual visibility function,
+    and again with 1 - visibility function shifted back by the fixed thickness", summed.
+    With the normal (Sec. 4.4) the segment ends at the tangent plane: hi < z_s.
+
+    Parameters
+    ----------
+    lo, hi : float or array_like
+        Ends of the segment in line coordinates of the unit sphere; ``hi < lo`` means an
+        empty segment (both integrals 0).
+    occ_lo, occ_hi : float or array_like
+        The occupied interval: the surface's line coordinate d_r and the back of the
+        surface (``np.inf`` for a solid half-space behind the depth buffer). May lie
+        anywhere on the line; only their part inside [lo, hi] counts.
+    z_s : float or array_like
+        Half-length of the line's chord in the unit sphere, z_s = sqrt(1 - x^2 - y^2) for
+        the disk offset (x, y); only the quadratic falloff uses it.
+    falloff : {"constant", "quadratic"}, optional
+        The falloff rho along the line (default ``"constant"``), as in
+        :func:`falloff_integral`.
 
     Returns
     -------
     unoccupied, total : ndarray
+        Integral of rho over the unoccupied part of [lo, hi], and over all of [lo, hi]; of
+        the broadcast shape of the inputs.
+
+    References
+    ----------
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.1 (the line integral
+    int_{-z_s}^{z_s} f(z) dz = max(min(z_s, d_r) + z_s, 0)), Sec. 4.3 (thickness), Sec. 4.4
+    (the segment clamped at the tangent plane).
+
+    Examples
+    --------
+    The centre line (z_s = 1) with the surface at d_r = 0.25: the paper's
+    max(min(1, 0.25) + 1, 0) = 1.25 of the chord's 2 is unoccupied; a thickness that ends
+    at 0.75 opens the last 0.25 again.
+
+    >>> import numpy as np
+    >>> u, t = line_integral(-1.0, 1.0, 0.25, np.inf, 1.0)
+    >>> float(u), float(t)
+    (1.25, 2.0)
+    >>> float(line_integral(-1.0, 1.0, 0.25, 0.75, 1.0)[0])
+    1.5
     """
     hi = np.maximum(hi, lo)
-    total = _falloff_integral(lo, hi, z_s, falloff)
+    total = falloff_integral(lo, hi, z_s, falloff=falloff)
+    # Loos & Sloan 2010, Sec. 4.1, line integral of f(z): the segment minus its occupied
+    # part [max(d_r, lo), min(occ_hi, hi)]; Sec. 4.3: occ_hi < inf is the thickness model
     a = np.clip(occ_lo, lo, hi)
     b = np.clip(occ_hi, lo, hi)
-    occupied = _falloff_integral(a, b, z_s, falloff)
+    occupied = falloff_integral(a, b, z_s, falloff=falloff)
     return total - occupied, total
 
 
@@ -49,58 +131,109 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
     """Volumetric Obscurance by line sampling (Loos & Sloan 2010, Sec. 4.1).
 
-    For each disk sample (x, y) of the pattern, the segment [-z_s, z_s] of the unit sphere
-    around the pixel's point (z_s = sqrt(1 - x^2 - y^2)) is compared analytically with the
-    depth d_r fetched where the disk point projects: the part in front of the depth buffer
-    is unoccupied. The segments are combined with the pattern's footnote-5 weights.
+    For each disk sample (x, y) of the pattern, the chord [-z_s, z_s] of the unit sphere
+    around the pixel's point p (z_s = sqrt(1 - x^2 - y^2)) is compared analytically with the
+    depth d_r read where the disk point p + R (x, y, 0) projects: the part in front of the
+    depth buffer is unoccupied. The chords are combined with the pattern's footnote-5
+    weights w_i, in ratio form (Notes).
 
     Parameters
     ----------
     gbuffer : GBuffer
+        The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
+        normals (H, W, 3) (facing the camera, n_z < 0), from
+        :func:`vobscure.render_gbuffer`; perspective or orthographic camera. The normals
+        are read only with ``normal_clamp``.
     radius : float
-        Ball radius in world units.
-    samples : int or SamplePattern
-        Disk pattern, or a count for the default point-symmetric pattern
-        (:func:`vobscure.patterns.disk`).
-    normal_clamp : bool
-        Restrict to the half-ball on the normal's side: every segment is clipped at the
-        tangent plane (Sec. 4.4). A flat open surface then reads 1.0 instead of 0.5.
+        Radius R of the ball around each pixel's point, in world units (> 0).
+    samples : int or SamplePattern, optional
+        The disk pattern: a count n >= 1 for the default point-symmetric pattern
+        ``vobscure.patterns.disk(n)`` (default 9), or a
+        :class:`~vobscure.patterns.SamplePattern` with (n, 2) ``points`` in the unit disk and
+        (n,) footnote-5 ``weights``. Depth-buffer taps per pixel: n.
+    normal_clamp : bool, optional
+        Restrict the ball to the half-ball on the normal's side (Sec. 4.4): every chord is
+        clipped at the tangent plane. A flat open surface then reads 1.0 instead of 0.5.
+        Default False.
     thickness : float, optional
-        Thickness model (Sec. 4.3): only the slab of this world thickness behind the depth
-        buffer is occupied.
-    falloff : {"constant", "quadratic"}
-    randomize : bool
-        Reflect the pattern about a random 2-D direction per pixel (Sec. 4.5), from a tiled
-        ``noise_size`` x ``noise_size`` texture.
-    seed : int, Generator or None
-    fetch : {"nearest", "bilinear"}
-    offscreen : {"clamp", "open"}
-        Samples off the image read the nearest border pixel, or empty space.
-    noise_size : int
+        Thickness model (Sec. 4.3): a point of the line is occupied only within this world
+        thickness (> 0) behind the depth buffer. Default None: everything behind the depth
+        buffer is solid.
+    falloff : {"constant", "quadratic"}, optional
+        The falloff rho: ``"constant"`` (default, the paper's choice), or ``"quadratic"``,
+        rho = 1 - r^2 with r the distance from p over R (z_s^2 - z^2 along the line); see
+        :func:`falloff_integral`.
+    randomize : bool, optional
+        Reflect the pattern per pixel about a random 2-D direction (Sec. 4.5), read from a
+        tiled ``noise_size`` x ``noise_size`` texture of unit vectors. Default True; False
+        uses the pattern as given at every pixel (``seed`` is then unused).
+    seed : int, numpy.random.Generator or None, optional
+        Seed of the random texture (default 0), converted once: an int >= 0 or None
+        (fresh OS entropy) goes through ``numpy.random.default_rng``, a Generator is used
+        as is. The same int gives the same image.
+    fetch : {"nearest", "bilinear"}, optional
+        How the depth for a disk point is read. ``"nearest"`` (default): the depth of the
+        pixel the point falls in, the line keeping its exact offset (x, y); the tap offset
+        is rounded with ``rint``, so a point-symmetric pattern reads point-symmetric pixels.
+        ``"bilinear"``: 1/z (perspective) or z (orthographic) interpolated between the four
+        nearest pixel centres, exact on planes; where any tap of a pixel would interpolate
+        towards background, all of that pixel's taps are snapped to pixel centres (offsets
+        recomputed there).
+    offscreen : {"clamp", "open"}, optional
+        Disk points that project off the image read the nearest border pixel
+        (``"clamp"``, default) or empty space (``"open"``).
+    noise_size : int, optional
+        Edge of the tiled random texture in pixels (>= 1, default
+        ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
+        (i mod noise_size, j mod noise_size). Unused without ``randomize``.
 
     Returns
     -------
     (H, W) ndarray
-        Visibility (1 = open), NaN on background; float32 for a float32 G-buffer.
+        Visibility in [0, 1] (1 = open), NaN on background; float32 for a float32
+        G-buffer, float64 otherwise (accumulated in float64).
+
+    Raises
+    ------
+    ValueError
+        If ``gbuffer`` is not a GBuffer, ``radius`` or ``thickness`` is not a positive
+        finite number, ``samples`` is neither a count >= 1 nor a disk pattern, ``seed`` or
+        ``noise_size`` is invalid, or a choice argument is not one of its values; the
+        message names the argument.
 
     Notes
     -----
+    With chords U_i (unoccupied integral of rho over sample i's segment, clipped at the
+    tangent plane with ``normal_clamp``), E_i (integral of rho over that segment) and N_i
+    (over the whole chord [-z_s, z_s]), the visibility is
+
+        V = sum_i w_i U_i / N_i  /  sum_i w_i E_i / N_i,
+
+    the footnote-5 weighting ("each sample will scale its line integral by the integral of
+    all the discrete samples in its Voronoi region") in ratio form. Without the normal
+    E_i = N_i and the denominator is 1 (sum w_i = 1); with it, a plane reads exactly 1.
+
     Under a perspective camera the depths are mapped to the sphere's line coordinate with
-    the projective warp of :func:`vobscure.screenspace._common.warp` instead of the paper's
-    linear (d - z_p) / R; the two agree to first order in (d - z_p) / z_p and the warp keeps
+    the projective warp d_r = (z_p / R) (1 - z_p / d) instead of the paper's linear
+    (d - z_p) / R; the two agree to first order in (d - z_p) / z_p and the warp keeps
     planes exact. Both read each line's depth along the pixel's line of sight, which for a
     pixel off the view axis crosses the ball obliquely: the estimate converges to a ball
-    sheared by the off-axis angle, not to :func:`vo_reference` (measured in
-    ``docs/screenspace.md``; the difference shrinks with the field of view, not the radius).
-    Depth-buffer taps per pixel: ``samples``.
+    sheared by the off-axis angle, not to :func:`vobscure.vo_reference` (measured in
+    ``docs/screenspace.md``; the difference shrinks with the field of view, not the
+    radius). Under an orthographic camera the two converge to the same value.
 
     References
     ----------
-    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.1 (line integral), 4.3
-    (thickness), 4.4 (normal), 4.5 (randomization), footnote 5 (weights).
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010: Sec. 4.1 (the line integral
+    int_{-z_s}^{z_s} f(z) dz = max(min(z_s, d_r) + z_s, 0), z_s = sqrt(1 - x^2 - y^2)),
+    Sec. 4.3 (thickness: the integral computed twice and summed), Sec. 4.4 and footnote 4
+    (clamping at the tangent plane given by the eye-space normal), Sec. 4.5 (reflection
+    about a random 2-D direction per pixel from a random texture) and footnote 5 (weights).
 
     Examples
     --------
+    A plane reads 1/2 with the whole ball and 1 with the half-ball:
+
     >>> import vobscure as vo
     >>> cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(8, 8), fov_y=40)
     >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam)
@@ -196,6 +329,7 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     wsum = 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         for (x, y), w in zip(points, weights):
+            # Loos & Sloan 2010, Sec. 4.1: z_s = sqrt(1 - x^2 - y^2)
             z_s2 = 1.0 - x * x - y * y
             if not z_s2 > 0.0:
                 continue        # a point on the rim has no chord
@@ -208,7 +342,8 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
             C.nearest_taps(px, dj, e, offscreen=offscreen, padded=padded, base=base, out=d, scratch=t)
             if raw is not None:
                 raw[:] = d
-            # depth -> line coordinate d_r of the unit sphere (C.warp)
+            # depth -> line coordinate d_r of the unit sphere, in place in d (C.warp; the
+            # paper's linear (d - z_p) / R of Sec. 4.1 under an orthographic camera)
             if px.perspective:
                 np.divide(b, d, out=d)
                 np.subtract(a, d, out=d)
@@ -216,12 +351,13 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 d -= z
                 d *= 1.0 / radius
             if normal_clamp:
+                # Sec. 4.4: the chord ends where the tangent plane crosses it, in t
                 np.multiply(gx, dj, out=t)
                 np.multiply(gy, e, out=dj)
                 t += dj
                 np.clip(t, -z_s, z_s, out=t)       # hi: the segment is [-z_s, hi]
             if simple:
-                k_s = 0.5 * w / z_s                # footnote 5: weight w over the chord 2 z_s
+                k_s = 0.5 * w / z_s                # footnote 5: weight w over the chord N = 2 z_s
                 if normal_clamp:
                     # Sec. 4.1 and 4.4: unoccupied = clip(d_r, -z_s, hi) + z_s, total = hi + z_s
                     np.clip(d, -z_s, t, out=d)         # hi >= -z_s: max(min(d, hi), -z_s)
@@ -247,7 +383,8 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 occ_hi = (raw + thickness - z) / radius
             hi = t if normal_clamp else z_s
             unocc, total = line_integral(-z_s, hi, d, occ_hi, z_s, falloff)
-            scale = w / float(_falloff_integral(-z_s, z_s, z_s, falloff))
+            # footnote 5: the chord's weight w over its full integral N = int_{-z_s}^{z_s} rho
+            scale = w / float(falloff_integral(-z_s, z_s, z_s, falloff=falloff))
             num += scale * unocc
             den += scale * np.broadcast_to(total, (k,))
     if simple and not normal_clamp:
@@ -286,13 +423,16 @@ def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, offsc
         d, xy = C.fetch_disk(px, np.column_stack([ox, oy]), fetch="bilinear", offscreen=offscreen,
                              bilinear=bilinear)
         ox, oy = xy[:, 0], xy[:, 1]
-        z_s = np.sqrt(np.maximum(0.0, 1.0 - ox * ox - oy * oy))
+        z_s = np.sqrt(np.maximum(0.0, 1.0 - ox * ox - oy * oy))   # Loos & Sloan 2010, Sec. 4.1
+        # depth -> line coordinate d_r of the unit sphere (Sec. 4.1; the warp under perspective)
         d_r = warp(d)
+        # Sec. 4.4: "clamp the evaluation of the integral" at the tangent plane's depth
         hi = np.minimum(z_s, np.clip(gx * ox + gy * oy, -4.0, 4.0)) if normal_clamp else z_s
         # occupied from the surface to the thickness (Sec. 4.3), or to infinity
         occ_hi = np.inf if thickness is None else warp(d + thickness)
         unocc, total = line_integral(-z_s, hi, d_r, occ_hi, z_s, falloff)
-        full = _falloff_integral(-z_s, z_s, z_s, falloff)
+        # footnote 5: the chord's weight w over its full integral N = int_{-z_s}^{z_s} rho
+        full = falloff_integral(-z_s, z_s, z_s, falloff=falloff)
         ok = full > 0   # a snapped point can leave the disk: it then has no segment
         scale = np.where(ok, w / np.where(ok, full, 1.0), 0.0)
         num += scale * unocc

@@ -1,5 +1,9 @@
 """Point sampling of Volumetric Obscurance (Loos & Sloan 2010, Sec. 4; the Crytek / StarCraft II
-family the paper compares against) and the converged screen-space reference."""
+family the paper compares against) and the converged screen-space reference.
+
+The paper does not number its equations; they are cited by section and content (the list is
+in ``docs/screenspace.md``, "How the paper is cited").
+"""
 
 from __future__ import annotations
 
@@ -35,12 +39,31 @@ def _is_centre(s) -> bool:
 
 
 def point_taps(samples=12) -> int:
-    """Depth taps per pixel :func:`vo_point` makes with ``samples`` (a count or a ball pattern):
-    one per sample except the centre (s = 0) of an odd point-symmetric pattern, which lies on
-    the surface and is counted without a fetch.
+    """Depth taps per pixel that :func:`vo_point` makes with ``samples``.
+
+    One per sample except the centre (s = 0) of an odd point-symmetric pattern, which lies
+    on the surface and is counted without a fetch (see :func:`vo_point`).
+
+    Parameters
+    ----------
+    samples : int or SamplePattern, optional
+        As in :func:`vo_point`: a count n >= 1 for the default pattern
+        ``vobscure.patterns.ball(n)`` (default 12), or a ball pattern ((n, 3) ``points``).
+
+    Returns
+    -------
+    int
+        The number of the pattern's points other than the centre.
+
+    Raises
+    ------
+    ValueError
+        If ``samples`` is neither a count >= 1 nor a ball pattern.
 
     Examples
     --------
+    The default 33-point pattern holds the centre, the 12-point one does not:
+
     >>> point_taps(12), point_taps(33)
     (12, 32)
     """
@@ -65,13 +88,13 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
             # up to rounding and filtering), and every point-symmetric pattern of odd n has
             # one. Its Voronoi region is a small ball around p, which the tangent plane
             # bisects: it counts half open for the ball and open for the half-ball (Sec.
-            # 4.4), its expectation on a locally flat surface. Counted as a test instead,
-            # it biased a plane by + w / 2 (0.530 for the 13-point default, 0.518 for the
-            # 33-point Lloyd pattern that was then the default).
+            # 4.4), its expectation on a locally flat surface (docs/screenspace.md, "The
+            # centre sample").
             num += w * (1.0 if normal_clamp else 0.5)
             den += w
             continue
-        # Sec. 4.5: a random 3-D (Householder) reflection per pixel: s - 2 (s . v) v
+        # Loos & Sloan 2010, Sec. 4.5: a random 3-D (Householder) reflection per pixel,
+        # s - 2 (s . v) v
         if vc is None:
             o = [np.full(k, s[a]) for a in range(3)]
         else:
@@ -90,11 +113,13 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
         else:
             x, y = W / 2.0 + px.focal * qx, H / 2.0 - px.focal * qy
         d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
-        # occupied: behind the depth buffer (within the thickness when one is given)
+        # occupied = 1 - O(x) of Sec. 4 (O = 1 in empty space): behind the depth buffer,
+        # within the thickness when one is given (Sec. 4.3); z is the sample's view depth X_z
         occupied = (z > d) & (z > 0)
         if thickness is not None:
             occupied &= z < d + thickness
-        rho = 1.0 if falloff == "constant" else 1.0 - float(s @ s)   # reflections keep |s|
+        # rho(d(P, x)) of Sec. 4: 1, or 1 - |s|^2 (reflections keep |s|)
+        rho = 1.0 if falloff == "constant" else 1.0 - float(s @ s)
         num += (w * rho) * ~occupied
         den += w * rho
     return np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
@@ -107,43 +132,97 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
 
     Each 3-D sample X = p + R s of the ball pattern is projected to the screen and is
     occupied when it lies behind the depth buffer there (within ``thickness`` behind it
-    when given). Visibility is the weighted unoccupied fraction. A sample at the centre
-    (s = 0, in every symmetric pattern of odd n) lies on the surface, where the depth test
-    is undecidable; it counts half open (open with ``normal_clamp``), its expectation on a
-    locally flat surface. With point-symmetric patterns a plane then reads 1/2 (1 clamped)
-    up to the depth buffer's quantization.
+    when given): a Monte Carlo estimate of the paper's V(P) = int_X rho(d(P, x)) O(x) dx,
+    normalized by int_X rho. Visibility is the weighted unoccupied fraction. A sample at
+    the centre (s = 0, in every symmetric pattern of odd n) lies on the surface, where the
+    depth test is undecidable; it counts half open (open with ``normal_clamp``), its
+    expectation on a locally flat surface, and is not tapped (:func:`point_taps`). With
+    point-symmetric patterns a plane then reads 1/2 (1 clamped) up to the depth buffer's
+    quantization.
 
     Parameters
     ----------
     gbuffer : GBuffer
+        The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
+        normals (H, W, 3) (facing the camera, n_z < 0), from
+        :func:`vobscure.render_gbuffer`; perspective or orthographic camera. The normals
+        are read only with ``normal_clamp``.
     radius : float
-    samples : int or SamplePattern
-        Ball pattern (:func:`vobscure.patterns.ball`) or a count for the default one.
-    normal_clamp : bool
-        Reflect samples below the tangent plane above it (Sec. 4.4): the half-ball.
+        Radius R of the ball around each pixel's point, in world units (> 0).
+    samples : int or SamplePattern, optional
+        The ball pattern: a count n >= 1 for the default point-symmetric pattern
+        ``vobscure.patterns.ball(n)`` (default 12), or a
+        :class:`~vobscure.patterns.SamplePattern` with (n, 3) ``points`` in the unit ball
+        and (n,) volume ``weights``.
+    normal_clamp : bool, optional
+        Reflect samples below the tangent plane above it (Sec. 4.4, after Filion &
+        McNaughton 2008): the half-ball on the normal's side. A plane then reads 1.0
+        instead of 0.5. Default False.
     thickness : float, optional
-        Occupied only within this world thickness behind the depth buffer (Sec. 4.3).
-    falloff : {"constant", "quadratic"}
-        rho = 1, or 1 - |s|^2 (samples weighted by it and the result normalized).
-    randomize : bool
-        A random 3-D reflection of the pattern per pixel (Sec. 4.5), from a tiled texture.
-    fetch : {"bilinear", "nearest"}
+        Thickness model (Sec. 4.3): a sample is occupied only within this world thickness
+        (> 0) behind the depth buffer. Default None: everything behind it is solid.
+    falloff : {"constant", "quadratic"}, optional
+        The falloff rho: ``"constant"`` (default, the paper's choice, Sec. 4) or
+        ``"quadratic"``, rho = 1 - |s|^2; samples are weighted by rho and the result is
+        normalized by the sum of the weights.
+    randomize : bool, optional
+        A random 3-D (Householder) reflection of the pattern per pixel (Sec. 4.5), read from
+        a tiled ``noise_size`` x ``noise_size`` texture of unit vectors. Default True; False
+        uses the pattern as given at every pixel (``seed`` is then unused).
+    seed : int, numpy.random.Generator or None, optional
+        Seed of the random texture (default 0), converted once: an int >= 0 or None
+        (fresh OS entropy) goes through ``numpy.random.default_rng``, a Generator is used
+        as is. The same int gives the same image.
+    fetch : {"bilinear", "nearest"}, optional
         ``"bilinear"`` (default) reconstructs the surface between pixel centres as planes
-        (interpolating 1/z under perspective), so a sample's occupancy on a plane is exact;
-        ``"nearest"`` reads the pixel's depth as a constant over the pixel (staircase
-        surfaces: a sample just above a tilted plane can read as behind it).
-    seed, offscreen, noise_size
-        As in :func:`vobscure.vo_line`.
+        (interpolating 1/z under perspective, z orthographically), so a sample's occupancy
+        on a plane is exact; ``"nearest"`` reads the pixel's depth as a constant over the
+        pixel (staircase surfaces: a sample just above a tilted plane can read as behind
+        it).
+    offscreen : {"clamp", "open"}, optional
+        Samples that project off the image read the nearest border pixel (``"clamp"``,
+        default) or empty space (``"open"``).
+    noise_size : int, optional
+        Edge of the tiled random texture in pixels (>= 1, default
+        ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
+        (i mod noise_size, j mod noise_size). Unused without ``randomize``.
 
     Returns
     -------
     (H, W) ndarray
-        Visibility, NaN on background. Depth-buffer taps per pixel: ``samples``.
+        Visibility in [0, 1] (1 = open), NaN on background; float32 for a float32
+        G-buffer, float64 otherwise (accumulated in float64). Depth-buffer taps per pixel:
+        ``point_taps(samples)``, n without the centre sample.
+
+    Raises
+    ------
+    ValueError
+        If ``gbuffer`` is not a GBuffer, ``radius`` or ``thickness`` is not a positive
+        finite number, ``samples`` is neither a count >= 1 nor a ball pattern, ``seed`` or
+        ``noise_size`` is invalid, or a choice argument is not one of its values; the
+        message names the argument.
+
+    Notes
+    -----
+    A sample is occupied when X_z > d (and X_z < d + thickness with the thickness model),
+    d the depth buffer at X's projection; with weights w_i and rho_i = rho(|s_i|),
+
+        V = sum_i w_i rho_i O(X_i)  /  sum_i w_i rho_i,
+
+    O = 1 for an unoccupied sample, 0 for an occupied one (the occupancy function of Sec. 4);
+    the centre sample, when the pattern has one, enters with O = 1/2 (1 with
+    ``normal_clamp``) and no tap.
+
+    This is the point-sampling family the paper compares line sampling with (Crytek,
+    Mittring 2007; StarCraft II, Filion & McNaughton 2008), not one of its own estimators.
 
     References
     ----------
-    Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4, 4.3, 4.4, 4.5; Mittring 2007;
-    Filion & McNaughton 2008.
+    Loos & Sloan, "Volumetric Obscurance", I3D 2010: Sec. 4 (V(P) = int_X rho(d(P, x)) O(x)
+    dx, the constant or quadratic rho), Sec. 4.3 (thickness), Sec. 4.4 (reflecting the
+    points below the hemisphere), Sec. 4.5 (per-pixel randomization from a random
+    texture). Mittring, "Finding next gen: CryEngine 2", SIGGRAPH 2007 course; Filion &
+    McNaughton, "Effects & techniques", SIGGRAPH 2008 course (StarCraft II).
 
     Examples
     --------
