@@ -12,11 +12,30 @@ BORDER_PIXELS = 2
 
 
 @pytest.fixture(scope="module")
-def conventions_png(tmp_path_factory):
-    from vobscure.experiments.figures import conventions
+def quick_figures(tmp_path_factory):
+    """Each registered figure made once in quick mode, in its own folder: name -> (module,
+    dir, paths). Shared by every test of this module: no figure is rendered twice."""
+    made = {}
 
-    out_dir = tmp_path_factory.mktemp("figures")
-    return out_dir, conventions.make(out_dir, quick=True)
+    def run(name):
+        if name not in made:
+            import importlib
+
+            from vobscure.experiments.figures import FIGURES
+
+            module = importlib.import_module(f"vobscure.experiments.figures.{FIGURES[name]}")
+            out_dir = tmp_path_factory.mktemp(name)
+            made[name] = (module, out_dir, module.make(out_dir, quick=True))
+        return made[name]
+
+    return run
+
+
+@pytest.fixture(scope="module")
+def conventions_png(quick_figures):
+    """The conventions figure's (dir, paths): the same render as the registered-figure tests'."""
+    _, out_dir, paths = quick_figures("conventions")
+    return out_dir, paths
 
 
 def test_conventions_returns_its_path(conventions_png):
@@ -61,25 +80,6 @@ def _registered():
     from vobscure.experiments.figures import FIGURES
 
     return list(FIGURES)
-
-
-@pytest.fixture(scope="module")
-def quick_figures(tmp_path_factory):
-    """Each registered figure made once in quick mode, in its own folder: name -> (dir, paths)."""
-    made = {}
-
-    def run(name):
-        if name not in made:
-            import importlib
-
-            from vobscure.experiments.figures import FIGURES
-
-            module = importlib.import_module(f"vobscure.experiments.figures.{FIGURES[name]}")
-            out_dir = tmp_path_factory.mktemp(name)
-            made[name] = (module, out_dir, module.make(out_dir, quick=True))
-        return made[name]
-
-    return run
 
 
 @pytest.mark.parametrize("name", _registered())
