@@ -10,7 +10,9 @@ What is measured (DESIGN.md, "Performance")
 1. Occlusion throughput, in rays per second, on a real mesh (the Stanford bunny from
    ``../shared/data/meshes`` beside the repository, or a procedural blob when it is missing) and on the
    Cornell box, from the visible surface points of a G-buffer (256 x 256; 64 x 64 with
-   ``--quick``), 256 rays per point, ``max_distance = RADIUS_FRACTION * scene.extent``.
+   ``--quick``), 256 rays per point, ``max_distance`` the experiments' default radius,
+   :func:`vobscure.experiments.common.default_radius` (``RADIUS_FRACTION`` = 0.1 of the
+   scene's extent).
    The rays are built exactly as :func:`vobscure.ambient_occlusion` builds them (same
    seed, Sobol' base, per-point shifts, direction generator and origin offset; the run
    checks that the per-point AO values agree). The baseline is ONE call of
@@ -47,17 +49,15 @@ Run from the repository root::
     python benchmarks/bench_groundtruth.py --repeats 5 --threads 2
 
 The "cores" column is process CPU time over wall time in the best round: how many cores
-the measurement actually got. On a shared machine a threaded ratio far below the thread
+the measurement actually got (the timer and the machine record are ``_bench``'s, over
+:mod:`vobscure.experiments.common`'s; every timed call has one untimed warm-up call). On a shared machine a threaded ratio far below the thread
 count with cores near 1 means another process held the other core, not a slow library.
 The exit code is 0 unless something raises; no timing is asserted.
 """
 
 from __future__ import annotations
 
-import argparse
-import platform
 import sys
-import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -69,15 +69,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _benc
 
 import _bench  # noqa: E402
 import vobscure as vo  # noqa: E402
-from _bench import Timing, interleaved, load_average  # noqa: E402
+from _bench import Timing, interleaved  # noqa: E402
+from vobscure.experiments.common import RADIUS_FRACTION, default_radius  # noqa: E402
 from vobscure.groundtruth import DEFAULT_GROUPS  # noqa: E402
 from vobscure.raytrace import default_threads  # noqa: E402
 from vobscure.sampling import shifted_hemisphere_directions, sobol_base  # noqa: E402
 
 #: the real meshes live beside the repository, in the workplace's shared folder
 BUNNY = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes" / "stanford-bunny.obj"
-#: AO ray length for the throughput benchmark, as a fraction of the scene's extent.
-RADIUS_FRACTION = 0.1
 #: Rays per point, as in the ground truth's default.
 RAYS = 256
 #: Independent randomizations per point, as in the ground truth's default.
@@ -119,9 +118,8 @@ class Report(_bench.Report):
 
 # --------------------------------------------------------------------------- setup
 def machine_facts(threads: int | None):
-    _bench.machine_facts("embreex")
-    print(f"  vobscure threads: {threads if threads is not None else default_threads()}"
-          f"{'' if threads is not None else ' (library default)'}   platform: {platform.platform()}")
+    _bench.machine_facts(f"vobscure threads: {threads if threads is not None else default_threads()}"
+                         f"{'' if threads is not None else ' (library default)'}")
 
 
 def load_scenes() -> list:
@@ -169,7 +167,7 @@ def f32(a) -> np.ndarray:
 def bench_throughput(scene, size, repeats, threads, report: Report):
     """Benchmark 1: occlusion rays/s, vobscure against one bare single-threaded run()."""
     points, normals = surface_points(scene, size)
-    radius = RADIUS_FRACTION * scene.extent
+    radius = default_radius(scene)
     o32, d32 = map(f32, ground_truth_rays(scene, points, normals))
     n = len(o32)
     tfar = np.full(n, radius, dtype=np.float32)
@@ -314,14 +312,10 @@ def bench_ground_truth(scene, size, repeats, threads, report: Report):
 
 # --------------------------------------------------------------------------- main
 def parse_args(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes (< 30 s), for smoke tests")
-    parser.add_argument("--repeats", type=int, default=3, help="best of N rounds (default 3)")
+    parser = _bench.parser(__doc__, quick="small sizes (< 30 s), for smoke tests", statistic="best")
     parser.add_argument("--threads", type=int, default=None,
                         help="vobscure worker threads (default: the library's, every usable core)")
-    args = parser.parse_args(argv)
-    if args.repeats < 1:
-        parser.error("--repeats must be >= 1")
+    args = _bench.parse(parser, argv)
     if args.threads is not None and args.threads < 1:
         parser.error("--threads must be >= 1")
     return args
@@ -330,23 +324,21 @@ def parse_args(argv):
 def main(argv=None) -> int:
     args = parse_args(argv)
     sizes = QUICK if args.quick else FULL
-    start = time.perf_counter()
-    machine_facts(args.threads)
-    print(f"  mode: {'quick' if args.quick else 'full'}   repeats: best of {args.repeats}")
-    scenes = load_scenes()
-    for scene in scenes:
-        scene.tracer  # build (and commit) the Embree scenes outside the timings
-    report = Report()
-    for scene in scenes:
-        bench_throughput(scene, sizes.points, args.repeats, args.threads, report)
-    for scene in scenes:
-        bench_gbuffer(scene, sizes.gbuffer, args.repeats, report)
-    for scene in scenes:
-        bench_ground_truth(scene, sizes.ground_truth, args.repeats, args.threads, report)
-    report.print_summary()
-    print(f"\n  total benchmark time {time.perf_counter() - start:.1f} s   "
-          f"load average now: {load_average()}")
-    return 0
+
+    def body(report):
+        machine_facts(args.threads)
+        print(f"  mode: {'quick' if args.quick else 'full'}   repeats: best of {args.repeats}")
+        scenes = load_scenes()
+        for scene in scenes:
+            scene.tracer  # build (and commit) the Embree scenes outside the timings
+        for scene in scenes:
+            bench_throughput(scene, sizes.points, args.repeats, args.threads, report)
+        for scene in scenes:
+            bench_gbuffer(scene, sizes.gbuffer, args.repeats, report)
+        for scene in scenes:
+            bench_ground_truth(scene, sizes.ground_truth, args.repeats, args.threads, report)
+
+    return _bench.run(body, Report())
 
 
 if __name__ == "__main__":

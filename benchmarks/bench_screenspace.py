@@ -10,50 +10,67 @@ What is measured (DESIGN.md, "Performance")
 -------------------------------------------
 Scene ``vo.scenes.cornell_box()`` with its suggested camera ``scene.camera((W, H))``, at
 512^2 and 1024^2 (256^2 and 512^2 with ``--quick``), ``radius`` 0.3 (about 0.08 of the
-scene's extent; ``--radius``). Configurations, each with ``normal_clamp`` False and True,
-``randomize`` on (the default), every other argument at its default:
-
-- ``vo.vo_point(gb, radius=r, samples=n)`` for n = 12, 33;
-- ``vo.vo_line(gb, radius=r, samples=n)`` for n = 5, 9;
-- ``vo.vo_area(gb, radius=r, samples=1)`` (skipped with a note when it is missing or fails).
+scene's extent; ``--radius``). The configurations are registry configurations
+(:class:`vobscure.methods.Config`: a method and a sample count, each method's default
+fetch) -- ``point:12``, ``point:33``, ``line:5``, ``line:9``, ``area:1`` -- each with
+``normal_clamp`` False and True, run through ``Config.run`` (``randomize`` on, every other
+argument at its default). Every configuration runs once on a 16^2 render before anything
+is measured (sample patterns and caches built), and each timed call has one more untimed
+warm-up call (:func:`vobscure.experiments.common.time_calls`).
 
 Per configuration:
 
-- **median s**: median wall time of one call (G-buffer given; ``prepare`` and everything
-  else inside the estimator included). **cores**: process CPU time / wall time in the
-  median round: how many cores the call actually got.
-- **taps/px**: depth-buffer taps per pixel, the cost model of DESIGN.md: one per sample for
-  point and line sampling; for area sampling the texels one mip lookup reads per sample:
-  2 levels (floor(lod) and floor(lod) + 1) x (taps per axis)^2, the taps per axis read from
-  the code (``area._filter_taps`` for ``vo_area``'s default ``reconstruction``: 2 for the
-  trilinear tent, i.e. 8 texels, 3 for the quadratic B-spline, i.e. 18 texels). Each texel
-  holds the 3 channels the mip-map stores (coverage, mean, central second moment), so
-  reads/px is 3 x taps/px there. Building the mip-map (one pass over 4/3 of the image) is
-  a per-frame cost, not a tap.
+- **median s**: median wall time of one call (G-buffer given; everything inside the
+  estimator included). **cores**: process CPU time / wall time in the median round: how
+  many cores the call actually got.
+- **taps/px** and **texels/px**: the registry's cost model (``Config.taps``,
+  ``Config.texels``; DESIGN.md): depth-buffer taps per pixel (one per sample, less the
+  centre of an odd point pattern, which ``vo_point`` does not tap; one mip lookup per area
+  sample) and the depth texels they read (``vobscure.methods.TEXELS_PER_TAP`` of the fetch:
+  nearest 1, bilinear 2 x 2 = 4, ``vo_area``'s B-spline lookup 2 levels x 3 x 3 = 18).
+  Building the mip-map (one pass over 4/3 of the image) is a per-frame cost, not a tap.
 - **reads/px**: the elements the estimator actually gathers from the depth buffer (or from
-  the moments mip-map) per pixel, *counted* in a separate untimed call: the depth arrays of
-  ``prepare``'s result (and the mip-map's arrays) are replaced by a view that counts what
-  integer-array indexing and ``take`` return (once per configuration, on a 128^2 render:
-  the count per pixel does not depend on the size). A bilinear fetch reads 4 texels (plus one
-  nearest read for the background fallback); the mip lookup reads taps/px texels x the
-  channels the mip-map stores (3 unclamped: coverage, mean, central moment; 10 clamped, with
-  the pixel positions and their moments).
-- **floor s** and **x floor**: the NumPy "gather floor" for ``taps/px`` taps and the
-  estimator's median time over it. The floor is :func:`gather_floor`: for each of the T taps,
-  continuous pixel coordinates of every valid pixel (centre + offset x radius_px), floored
-  to integer indices, clipped to the image, and ``depth[i, j]`` gathered, nothing else, over
-  the flat arrays of valid pixels of ``vobscure.screenspace._common.prepare(gb, radius)``
-  (built outside the timing: ``prepare`` is timed alone as context). The T offsets are a
-  golden-angle spiral filling the unit disk, the same for every pixel (no per-pixel
-  randomization: neighbouring pixels read neighbouring texels, so the floor is slightly
-  kinder to the cache than the randomized estimators). Goal: ``vo_line`` within 1.5x of
-  its floor.
+  the moments mip-map) per valid pixel, *counted* in a separate untimed call: the depth
+  arrays of the estimators' per-chunk pixels, ``vo_line``'s bordered depth copy and the
+  mip-map's channels are replaced by views that count what integer-array indexing and
+  ``take`` return (once per configuration, on a 128^2 render: the count per pixel does not
+  depend on the size). This is white-box instrumentation, an independent check of the
+  registry's texel model; it patches library internals found by attribute
+  (:func:`_internals`), and prints a NOTE instead of a count if they have moved.
+- **floor s** and **x floor**: the NumPy "gather floor" for ``texels/px`` one-texel reads
+  and the estimator's median time over it. The floor is :func:`gather_floor`: for each of
+  the T reads, continuous pixel coordinates of every valid pixel (centre + offset x
+  radius_px), floored to integer indices, clipped to the image, and ``depth[i, j]``
+  gathered, nothing else, over the flat arrays of the valid pixels (:func:`valid_pixels`,
+  from the public G-buffer and camera, built outside the timing and timed alone as
+  context). The T offsets are a golden-angle spiral filling the unit disk, the same for
+  every pixel (no per-pixel randomization: neighbouring pixels read neighbouring texels,
+  so the floor is slightly kinder to the cache than the randomized estimators). Goal:
+  ``vo_line`` within 1.5x of its floor.
 - **peak B/px**: peak extra memory per pixel: ``tracemalloc`` (NumPy reports its buffers to
   it) is started after the G-buffer is built and the sample patterns are cached, the
-  estimator runs once, and the peak of traced memory is divided by W x H. It includes
-  ``prepare``'s per-pixel arrays and the returned image (8 B/px in float64). Goal: under
+  estimator runs once, and the peak of traced memory is divided by W x H. It includes the
+  estimator's per-pixel arrays and the returned image (8 B/px in float64). Goal: under
   100 B/px and not growing with the sample count (at most ``GOAL_GROWTH_BYTES`` = 1 B/px
   more): point 12 vs 33, line 5 vs 9, and line 33 vs 65 (memory only) side by side.
+
+The registry's texels against the counted reads
+-----------------------------------------------
+The two count different things, and differ by fixed factors (measured: line 1.000, point
+1.250, area 3.000, clamped area 10.000, at every sample count):
+
+- **nearest** (``vo_line``): one read per texel, reads = texels.
+- **bilinear** (``vo_point``): 5 reads per tap against the model's 4 texels. The depth fetch
+  first gathers the texel containing the tap (the value it falls back to where one of the
+  2 x 2 neighbours is background), then the 2 x 2 texels around it; the first is always
+  one of the four, so the tap touches 4 distinct texels (what a GPU's bilinear fetch
+  reads) and re-reads one of them. The fallback gather is an implementation cost of the
+  NumPy fetch (one more gather pass per tap), not more memory touched.
+- **mip-map lookup** (``vo_area``): 54 reads per lookup = 18 texels x 3 channels (coverage,
+  mean, central second moment of 1/z), 180 = 18 x 10 channels with ``normal_clamp`` (the
+  pixel positions' means and the 3 x 3 central moments of (q, X, Y) are mipped too). The
+  model counts a texel once whatever it holds, as a GPU fetch of a multi-channel texel;
+  the NumPy code keeps each channel in its own array, so each channel is a gather.
 
 Run from the repository root::
 
@@ -66,13 +83,10 @@ The exit code is 0 unless something raises; no timing is asserted.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import gc
 import os
-import platform
 import sys
-import time
 import tracemalloc
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -86,23 +100,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _benc
 
 import _bench  # noqa: E402
 import vobscure as vo  # noqa: E402
-from _bench import Timing, interleaved, load_average  # noqa: E402
-from vobscure.screenspace import _common as C  # noqa: E402
+from _bench import Timing, interleaved  # noqa: E402
+from vobscure.methods import Config  # noqa: E402
 
 FULL_SIZES = (512, 1024)
 QUICK_SIZES = (256, 512)
 RADIUS = 0.3
-POINT_SAMPLES = (12, 33)
-LINE_SAMPLES = (5, 9)
-#: line sample counts measured for memory only, to show the trend with samples
-LINE_MEMORY_SAMPLES = (33, 65)
-AREA_SAMPLES = 1
+#: the timed configurations (registry Configs, each method's default fetch), each run with
+#: normal_clamp False and True
+CONFIGS = (Config("point", 12), Config("point", 33), Config("line", 5), Config("line", 9), Config("area", 1))
+#: configurations measured for memory only, to show the trend with samples
+MEMORY_CONFIGS = (Config("line", 33), Config("line", 65))
+#: peak memory of the second of each pair minus the first's: "not growing with samples"
+GROWTH_PAIRS = ((Config("point", 12), Config("point", 33)), (Config("line", 5), Config("line", 9)),
+                (Config("line", 33), Config("line", 65)))
 #: image edge of the render on which the reads per pixel are counted
 READS_SIZE = 128
-#: mip levels one area lookup blends (floor(lod) and floor(lod) + 1)
-AREA_LEVELS = 2
-#: channels of a mip texel: coverage, mean, central second moment
-AREA_CHANNELS = 3
 #: goals
 GOAL_LINE_FLOOR = 1.5
 GOAL_BYTES_PER_PIXEL = 100.0
@@ -112,107 +125,63 @@ GOAL_GROWTH_BYTES = 1.0
 
 # --------------------------------------------------------------------------- configurations
 @dataclass(frozen=True)
-class Config:
-    name: str                      # e.g. "line 9 clamp"
-    kind: str                      # "point" | "line" | "area"
-    samples: int
-    clamp: bool
-    fn: Callable                   # fn(gb) -> image
-    taps_per_sample: int = 1       # area: texels of one mip lookup
+class Bench:
+    """A registry configuration with the ``normal_clamp`` it runs with."""
+
+    config: Config
+    clamp: bool = False
 
     @property
-    def taps(self) -> int:
-        """Depth-buffer taps per pixel (DESIGN.md's cost model), see the module docstring.
-        ``vo_point`` does not tap the centre of an odd (point-symmetric) pattern: it lies on
-        the surface and counts half open without a fetch."""
-        if self.kind == "point":
-            return vo.screenspace.point_taps(self.samples)
-        return self.samples * self.taps_per_sample
+    def name(self) -> str:          # e.g. "line:9 clamp"
+        return f"{self.config.label}{' clamp' if self.clamp else ''}"
+
+    @property
+    def method(self) -> str:
+        return self.config.method
+
+    def call(self, gb, radius: float):
+        """The estimator on ``gb``: the registry's ``Config.run``, randomize on, every
+        argument but the samples, the radius and normal_clamp at its default."""
+        return self.config.run(gb, radius=radius, normal_clamp=self.clamp)
 
 
-@dataclass(frozen=True)
-class Area:
-    fn: Callable
-    reconstruction: str            # the default reconstruction between texels
-    texels: int                    # texels one lookup reads (both levels)
+def configurations() -> list[Bench]:
+    """Every timed configuration, without and then with the normal clamp."""
+    return [Bench(cfg, clamp) for clamp in (False, True) for cfg in CONFIGS]
 
 
-def area_texels(fn) -> tuple[str, int]:
-    """(reconstruction, texels per lookup) of vo_area's defaults, from the code's structure:
-    AREA_LEVELS levels x (taps per axis)^2, the taps per axis being what
-    ``area._filter_taps`` returns for the default ``reconstruction`` (a tent: 2, the
-    quadratic B-spline: 3). Falls back to the trilinear 2 x 2 x 2 = 8 with a note."""
-    try:
-        import inspect
-
-        from vobscure.screenspace import area as A
-        rec = inspect.signature(fn).parameters["reconstruction"].default
-        per_axis = len(A._filter_taps(np.zeros(1), rec))
-        return rec, AREA_LEVELS * per_axis * per_axis
-    except Exception as exc:  # noqa: BLE001 - the area module is being written concurrently
-        print(f"  NOTE: cannot read vo_area's lookup structure ({type(exc).__name__}: {exc}); "
-              "assuming trilinear, 8 texels per sample")
-        return "trilinear?", AREA_LEVELS * 2 * 2
-
-
-def find_area() -> Area | None:
-    """vo.vo_area, or None with a printed note when it is missing or fails."""
-    fn = getattr(vo, "vo_area", None)
-    where = "vo.vo_area"
-    if fn is None:
-        try:
-            from vobscure.screenspace.area import vo_area as fn
-            where = "vobscure.screenspace.area.vo_area (not exported as vo.vo_area yet)"
-        except Exception as exc:  # noqa: BLE001 - being written concurrently: report, skip
-            print(f"  NOTE: vo_area unavailable ({type(exc).__name__}: {exc}); area rows skipped")
-            return None
-    try:   # smoke test on a tiny G-buffer
-        scene = vo.scenes.cornell_box()
-        gb = vo.render_gbuffer(scene, scene.camera((16, 16)))
-        for clamp in (False, True):
-            fn(gb, radius=RADIUS, samples=AREA_SAMPLES, normal_clamp=clamp)
-    except Exception as exc:  # noqa: BLE001
-        print(f"  NOTE: vo_area fails on a 16x16 G-buffer ({type(exc).__name__}: {exc}); "
-              "area rows skipped")
-        return None
-    rec, texels = area_texels(fn)
-    print(f"  area sampling: {where}; default reconstruction {rec!r}: {texels} texels "
-          f"({AREA_LEVELS} levels) x {AREA_CHANNELS} channels per lookup")
-    return Area(fn, rec, texels)
-
-
-def configurations(radius: float, area: Area | None) -> list[Config]:
-    """Every timed configuration: randomize on, every argument but samples and
-    normal_clamp at its default."""
-    def call(fn, n, clamp):
-        return lambda gb: fn(gb, radius=radius, samples=n, normal_clamp=clamp)
-
-    out = []
-    for clamp in (False, True):
-        tag = " clamp" if clamp else ""
-        for n in POINT_SAMPLES:
-            out.append(Config(f"point {n}{tag}", "point", n, clamp, call(vo.vo_point, n, clamp)))
-        for n in LINE_SAMPLES:
-            out.append(Config(f"line {n}{tag}", "line", n, clamp, call(vo.vo_line, n, clamp)))
-        if area is not None:
-            out.append(Config(f"area {AREA_SAMPLES}{tag}", "area", AREA_SAMPLES, clamp,
-                              call(area.fn, AREA_SAMPLES, clamp), taps_per_sample=area.texels))
-    return out
-
-
-def line_config(radius: float, n: int) -> Config:
-    return Config(f"line {n}", "line", n, False, lambda gb: vo.vo_line(gb, radius=radius, samples=n))
-
-
-def warm_patterns():
-    """Build (and cache) every sample pattern outside the timings and the memory traces."""
-    for n in POINT_SAMPLES:
-        vo.patterns.ball(n)
-    for n in LINE_SAMPLES + LINE_MEMORY_SAMPLES + (AREA_SAMPLES,):
-        vo.patterns.disk(n)
+def warm_up(radius: float):
+    """Run every configuration once on a 16 x 16 render: the sample patterns and other
+    caches are built outside the timings and the memory traces."""
+    scene = vo.scenes.cornell_box()
+    gb = vo.render_gbuffer(scene, scene.camera((16, 16)))
+    for b in configurations() + [Bench(cfg) for cfg in MEMORY_CONFIGS]:
+        b.call(gb, radius)
 
 
 # --------------------------------------------------------------------------- the gather floor
+@dataclass(frozen=True)
+class FloorPixels:
+    """The valid pixels of a G-buffer, flattened, from the public G-buffer and camera: the
+    depth buffer in float64 (NaN as +inf), the pixel centres and the radius in pixels."""
+
+    cx: np.ndarray
+    cy: np.ndarray
+    radius_px: np.ndarray
+    depth: np.ndarray
+
+
+def valid_pixels(gb, radius: float) -> FloorPixels:
+    """The per-pixel setup every estimator starts with (valid pixels, their centres, the
+    ball radius projected at their depth), here as the floor's input."""
+    depth = np.asarray(gb.depth, dtype=np.float64)
+    depth = np.where(np.isnan(depth), np.inf, depth)
+    index = np.flatnonzero(np.isfinite(depth) & (depth > 0))
+    i, j = np.divmod(index, depth.shape[1])
+    radius_px = radius * gb.camera.pixels_per_unit(depth.reshape(-1)[index])
+    return FloorPixels(j + 0.5, i + 0.5, radius_px, depth)
+
+
 def spiral(count: int) -> np.ndarray:
     """``count`` offsets (count, 2) filling the unit disk evenly (golden-angle spiral)."""
     i = np.arange(count) + 0.5
@@ -221,8 +190,8 @@ def spiral(count: int) -> np.ndarray:
     return np.column_stack([r * np.cos(a), r * np.sin(a)])
 
 
-def gather_floor(px, offsets: np.ndarray) -> np.ndarray:
-    """The time floor of ``len(offsets)`` depth taps per pixel: index arithmetic and gathers.
+def gather_floor(px: FloorPixels, offsets: np.ndarray) -> np.ndarray:
+    """The time floor of ``len(offsets)`` one-texel reads per pixel: index arithmetic and gathers.
 
     For each (ox, oy) of ``offsets`` (unit-disk offsets): continuous pixel coordinates
     centre + offset x radius_px of every valid pixel, floored to integer indices, clipped
@@ -230,12 +199,11 @@ def gather_floor(px, offsets: np.ndarray) -> np.ndarray:
     no accumulation). Returns the last gather, so that nothing can be skipped.
     """
     H, W = px.depth.shape
-    cx, cy, r, depth = px.center[:, 0], px.center[:, 1], px.radius_px, px.depth
     d = None
     for ox, oy in offsets:
-        j = np.clip(np.floor(cx + ox * r), 0, W - 1).astype(np.intp)
-        i = np.clip(np.floor(cy - oy * r), 0, H - 1).astype(np.intp)
-        d = depth[i, j]
+        j = np.clip(np.floor(px.cx + ox * px.radius_px), 0, W - 1).astype(np.intp)
+        i = np.clip(np.floor(px.cy - oy * px.radius_px), 0, H - 1).astype(np.intp)
+        d = px.depth[i, j]
     return d
 
 
@@ -272,12 +240,30 @@ def _count(a):
     return v
 
 
+def _internals():
+    """The library internals the read counter patches, found where the estimators find them.
+
+    Counting gathers is white-box by nature: no public API hands out the arrays the
+    estimators index. The counter reaches, by attribute and not by import, (1) the
+    estimators' shared module (``vobscure.screenspace.line.C``, the module whose
+    ``prepare`` every estimator calls for its per-chunk pixels and whose ``PaddedDepth``
+    holds ``vo_line``'s bordered depth copy) and (2) ``vo_area``'s mip-map class
+    (``vobscure.screenspace.area._Pyramid``). If a refactoring moves them the count fails
+    with a NOTE and the rest of the benchmark runs.
+    """
+    from vobscure.screenspace import area, line
+
+    return line.C, area._Pyramid
+
+
 @contextmanager
 def counting_reads():
-    """While active, the depth arrays of prepare()'s result and the area mip-map's arrays
-    count the elements gathered from them. Patches module attributes only, and restores them."""
-    patched = []
-    original_prepare = C.prepare
+    """While active, the depth arrays of prepare()'s result, vo_line's padded depth copy and
+    the area mip-map's arrays count the elements gathered from them. Patches class and
+    module attributes only, and restores them."""
+    common, pyramid = _internals()
+    original_prepare, original_build = common.prepare, pyramid._build
+    original_padded = common.PaddedDepth.__init__
 
     def prepare(*args, **kwargs):
         px = original_prepare(*args, **kwargs)
@@ -285,39 +271,24 @@ def counting_reads():
                   if f.name.startswith("depth") and isinstance(getattr(px, f.name), np.ndarray)}
         return dataclasses.replace(px, **images)
 
-    C.prepare = prepare
-    patched.append((C, "prepare", original_prepare))
-    try:
-        from vobscure.screenspace import area as A
-        pyramid = getattr(A, "_Pyramid", None)
-    except Exception:  # noqa: BLE001 - area sampling absent
-        pyramid = None
-    if pyramid is not None:
+    def build(self, *args, **kwargs):
         # the pyramid's channels: self.c and the lists self.m, self.v (built by _build, which
         # both __init__ and from_depth call)
-        original_build = pyramid._build
+        original_build(self, *args, **kwargs)
+        for name, value in list(vars(self).items()):
+            if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+                setattr(self, name, _count(value))
+            elif isinstance(value, list) and value and all(isinstance(x, np.ndarray) for x in value):
+                setattr(self, name, [_count(x) if x.dtype.kind == "f" else x for x in value])
 
-        def build(self, *args, **kwargs):
-            original_build(self, *args, **kwargs)
-            for name, value in list(vars(self).items()):
-                if isinstance(value, np.ndarray) and value.dtype.kind == "f":
-                    setattr(self, name, _count(value))
-                elif isinstance(value, list) and value and all(isinstance(x, np.ndarray) for x in value):
-                    setattr(self, name, [_count(x) if x.dtype.kind == "f" else x for x in value])
-
-        pyramid._build = build
-        patched.append((pyramid, "_build", original_build))
-    padded = getattr(C, "PaddedDepth", None)
-    if padded is not None:
+    def padded_init(self, *args, **kwargs):
         # vo_line's snapped taps read a bordered copy of the depth buffer (PaddedDepth.flat)
-        original_padded = padded.__init__
+        original_padded(self, *args, **kwargs)
+        self.flat = _count(self.flat)
 
-        def padded_init(self, *args, **kwargs):
-            original_padded(self, *args, **kwargs)
-            self.flat = _count(self.flat)
-
-        padded.__init__ = padded_init
-        patched.append((padded, "__init__", original_padded))
+    patched = [(common, "prepare", original_prepare), (pyramid, "_build", original_build),
+               (common.PaddedDepth, "__init__", original_padded)]
+    common.prepare, pyramid._build, common.PaddedDepth.__init__ = prepare, build, padded_init
     try:
         yield
     finally:
@@ -325,15 +296,15 @@ def counting_reads():
             setattr(owner, name, value)
 
 
-def reads_per_pixel(cfg: Config, gb, pixels: int) -> float | None:
+def reads_per_pixel(b: Bench, gb, radius: float, pixels: int) -> float | None:
     """Elements gathered from the depth buffer (or mip-map) per valid pixel, or None."""
     try:
         with counting_reads():
             _Counting.total = 0
-            cfg.fn(gb)
+            b.call(gb, radius)
             return _Counting.total / pixels
-    except Exception as exc:  # noqa: BLE001 - instrumentation is best effort
-        print(f"  NOTE: counting the reads of {cfg.name} failed ({type(exc).__name__}: {exc})")
+    except Exception as exc:  # noqa: BLE001 - white-box instrumentation: report, go on
+        print(f"  NOTE: counting the reads of {b.name} failed ({type(exc).__name__}: {exc})")
         return None
 
 
@@ -353,116 +324,125 @@ def peak_bytes(fn: Callable) -> int:
 
 # --------------------------------------------------------------------------- report
 class Report(_bench.Report):
-    columns = (f"{'configuration':<22} {'median s':>9} {'cores':>5} {'taps/px':>8} {'reads/px':>9} "
-               f"{'floor s':>8} {'x floor':>8} {'peak B/px':>10}")
+    columns = (f"{'configuration':<22} {'median s':>9} {'cores':>5} {'taps/px':>7} {'texels/px':>9} "
+               f"{'reads/px':>8} {'floor s':>8} {'x floor':>8} {'peak B/px':>10}")
     summary_title = ("Summary (time ratios are medians from this one run; the 'cores' column above\n"
                      "   shows how many cores each measurement got on this shared machine)")
     label_width = 62
 
     @staticmethod
-    def row(label, timing: Timing | None, taps=None, reads=None, floor: Timing | None = None,
+    def row(label, timing: Timing | None, taps=None, texels=None, reads=None, floor: Timing | None = None,
             peak=None, note=""):
         sec = f"{timing.seconds:9.4f}" if timing else f"{'':9}"
         cores = f"{timing.cores:5.2f}" if timing else f"{'':5}"
-        t = f"{taps:8d}" if taps is not None else f"{'':8}"
-        r = f"{reads:9.1f}" if reads is not None else f"{'':9}"
+        t = f"{taps:7d}" if taps is not None else f"{'':7}"
+        x = f"{texels:9d}" if texels is not None else f"{'':9}"
+        r = f"{reads:8.1f}" if reads is not None else f"{'':8}"
         fl = f"{floor.seconds:8.4f}" if floor else f"{'':8}"
         ratio = f"{timing.seconds / floor.seconds:7.2f}x" if (timing and floor) else f"{'':8}"
         p = f"{peak:10.1f}" if peak is not None else f"{'':10}"
-        print(f"  {label:<22} {sec} {cores} {t} {r} {fl} {ratio} {p} {note}".rstrip())
+        print(f"  {label:<22} {sec} {cores} {t} {x} {r} {fl} {ratio} {p} {note}".rstrip())
 
 
 # --------------------------------------------------------------------------- setup
 def machine_facts():
-    _bench.machine_facts()
     threads = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
                if k in os.environ}
-    print(f"  platform: {platform.platform()}   BLAS thread variables: {threads or 'unset'}")
-    print("  (the estimators are NumPy code on one thread; 'cores' above 1 means BLAS or another")
-    print("   library used more than one)")
+    _bench.machine_facts(f"BLAS thread variables: {threads or 'unset'}   (the estimators are NumPy "
+                         "code on one thread;\n   'cores' above 1 means BLAS or another library used more "
+                         "than one)")
 
 
 # --------------------------------------------------------------------------- benchmark
-def count_reads(radius: float, area: Area | None) -> dict:
+def count_reads(radius: float) -> dict:
     """reads/px of every configuration, counted once on a READS_SIZE^2 render (the count per
-    pixel is structural: it does not depend on the image size)."""
+    pixel is structural: it does not depend on the image size), printed beside the
+    registry's texels/px."""
     scene = vo.scenes.cornell_box()
     gb = vo.render_gbuffer(scene, scene.camera((READS_SIZE, READS_SIZE)))
     k = int(np.count_nonzero(np.isfinite(gb.depth) & (gb.depth > 0)))
-    return {cfg.name: reads_per_pixel(cfg, gb, k) for cfg in configurations(radius, area)}
+    reads = {b.name: reads_per_pixel(b, gb, radius, k) for b in configurations()}
+    print(f"\n== The registry's texel model against the reads counted ({READS_SIZE}x{READS_SIZE}, "
+          f"{k} valid pixels)")
+    print(f"  {'configuration':<22} {'fetch':>9} {'taps/px':>7} {'texels/px':>9} {'reads/px':>8} "
+          f"{'reads/texel':>11}")
+    for b in configurations():
+        r = reads[b.name]
+        ratio = f"{r / b.config.texels:11.3f}" if r is not None else f"{'':11}"
+        counted = f"{r:8.1f}" if r is not None else f"{'':8}"
+        print(f"  {b.name:<22} {b.config.fetch_used:>9} {b.config.taps:7d} {b.config.texels:9d} "
+              f"{counted} {ratio}")
+    print("  (reads count array elements gathered, texels count distinct depth texels: a bilinear\n"
+          "   tap also gathers the nearest texel, one of its 4, as the background fallback: 5/4;\n"
+          "   a mip texel holds 3 moment channels, 10 with normal_clamp: 3x and 10x)")
+    return reads
 
 
-def bench_size(size: int, radius: float, repeats: int, area: Area | None, reads: dict, report: Report):
+def bench_size(size: int, radius: float, repeats: int, reads: dict, report: Report):
     scene = vo.scenes.cornell_box()
     gb = vo.render_gbuffer(scene, scene.camera((size, size)))
     pixels_all = size * size
-    px = C.prepare(gb, radius)
-    k = len(px.index)
-    configs = configurations(radius, area)
-    floors = {T: spiral(T) for T in sorted({c.taps for c in configs})}
-    for cfg in configs:     # warm up (patterns, mip-map caches, first-touch of the pages)
-        cfg.fn(gb)
+    px = valid_pixels(gb, radius)
+    k = len(px.cx)
+    configs = configurations()
+    floors = {T: spiral(T) for T in sorted({b.config.texels for b in configs})}
 
     print(f"\n-- {scene.name}, {size}x{size} = {pixels_all} pixels ({k} valid), radius {radius:g} "
           f"({radius / scene.extent:.3f} x extent), median radius {np.median(px.radius_px):.1f} px")
-    fns = {"prepare": lambda: C.prepare(gb, radius)}
+    fns = {"setup": lambda: valid_pixels(gb, radius)}
     for T, offsets in floors.items():
         fns[f"floor {T}"] = lambda offsets=offsets: gather_floor(px, offsets)
-    for cfg in configs:
-        fns[cfg.name] = lambda cfg=cfg: cfg.fn(gb)
+    for b in configs:
+        fns[b.name] = lambda b=b: b.call(gb, radius)
     t = interleaved(fns, repeats, statistic="median")
 
-    peaks = {cfg.name: peak_bytes(lambda cfg=cfg: cfg.fn(gb)) / pixels_all for cfg in configs}
-    peaks["prepare"] = peak_bytes(lambda: C.prepare(gb, radius)) / pixels_all
-    for n in LINE_MEMORY_SAMPLES:
-        cfg = line_config(radius, n)
-        peaks[cfg.name] = peak_bytes(lambda cfg=cfg: cfg.fn(gb)) / pixels_all
+    def floor(b):
+        return t[f"floor {b.config.texels}"]
 
-    report.header(f"{size}x{size}: median of {repeats} interleaved rounds")
-    for cfg in configs:
-        report.row(cfg.name, t[cfg.name], cfg.taps, reads[cfg.name], t[f"floor {cfg.taps}"], peaks[cfg.name])
+    peaks = {b.name: peak_bytes(lambda b=b: b.call(gb, radius)) / pixels_all for b in configs}
+    peaks["setup"] = peak_bytes(lambda: valid_pixels(gb, radius)) / pixels_all
+    for cfg in MEMORY_CONFIGS:
+        peaks[cfg.label] = peak_bytes(lambda cfg=cfg: Bench(cfg).call(gb, radius)) / pixels_all
+
+    report.header(f"{size}x{size}: median of {repeats} interleaved rounds; floor = texels/px one-texel reads")
+    for b in configs:
+        report.row(b.name, t[b.name], b.config.taps, b.config.texels, reads[b.name], floor(b), peaks[b.name])
     print("  context:")
-    report.row("prepare() alone", t["prepare"], peak=peaks["prepare"], note="(inside every estimator)")
+    report.row("valid-pixel setup", t["setup"], peak=peaks["setup"], note="(what every estimator starts with)")
     for T in floors:
-        report.row(f"gather floor, {T} taps", t[f"floor {T}"], T, float(T))
+        report.row(f"gather floor {T}", t[f"floor {T}"], T, T, float(T))
     print("  peak extra memory per pixel against the sample count (B/px):")
-    for kind, (a, b) in (("point", POINT_SAMPLES), ("line", LINE_SAMPLES), ("line", LINE_MEMORY_SAMPLES)):
-        pa, pb = peaks[f"{kind} {a}"], peaks[f"{kind} {b}"]
-        print(f"    {kind} {a:>2} vs {b:>2} samples: {pa:7.1f} vs {pb:7.1f}  ({pb - pa:+.1f} B/px, "
-              f"{(pb - pa) / (b - a):+.2f} B/px per extra sample)")
+    for a, b in GROWTH_PAIRS:
+        pa, pb = peaks[a.label], peaks[b.label]
+        print(f"    {a.label:>8} vs {b.label:<8}: {pa:7.1f} vs {pb:7.1f}  ({pb - pa:+.1f} B/px, "
+              f"{(pb - pa) / (b.samples - a.samples):+.2f} B/px per extra sample)")
 
     tag = f"[{size}^2]"
-    for cfg in configs:
-        if cfg.kind == "line":
-            report.goal(f"{tag} {cfg.name} / gather floor ({cfg.taps} taps)",
-                        t[cfg.name].seconds / t[f"floor {cfg.taps}"].seconds, GOAL_LINE_FLOOR, at_least=False)
-    for cfg in configs:
-        if cfg.kind != "line":
-            report.note(f"{tag} {cfg.name} / gather floor ({cfg.taps} taps)",
-                        t[cfg.name].seconds / t[f"floor {cfg.taps}"].seconds)
-    report.note(f"{tag} prepare() alone / gather floor ({LINE_SAMPLES[-1]} taps)",
-                t["prepare"].seconds / t[f"floor {LINE_SAMPLES[-1]}"].seconds)
-    for kind in ("point", "line", "area"):
-        rows = [c for c in configs if c.kind == kind]
-        if rows:
-            worst = max(rows, key=lambda c: peaks[c.name])
-            report.goal(f"{tag} peak memory, worst {kind} ({worst.name})", peaks[worst.name],
-                        GOAL_BYTES_PER_PIXEL, at_least=False, unit=" B/px")
-    for kind, (a, b) in (("point", POINT_SAMPLES), ("line", LINE_SAMPLES), ("line", LINE_MEMORY_SAMPLES)):
-        report.goal(f"{tag} peak memory growth, {kind} {a} -> {b} samples",
-                    peaks[f"{kind} {b}"] - peaks[f"{kind} {a}"], GOAL_GROWTH_BYTES,
-                    at_least=False, unit=" B/px")
+    for b in configs:
+        label, ratio = f"{tag} {b.name} / gather floor ({b.config.texels} reads)", t[b.name].seconds / floor(b).seconds
+        if b.method == "line":
+            report.goal(label, ratio, GOAL_LINE_FLOOR, at_least=False)
+    for b in configs:
+        if b.method != "line":
+            report.note(f"{tag} {b.name} / gather floor ({b.config.texels} reads)",
+                        t[b.name].seconds / floor(b).seconds)
+    line = max(c.texels for c in CONFIGS if c.method == "line")
+    report.note(f"{tag} valid-pixel setup alone / gather floor ({line} reads)",
+                t["setup"].seconds / t[f"floor {line}"].seconds)
+    for method in dict.fromkeys(c.method for c in CONFIGS):
+        worst = max((b for b in configs if b.method == method), key=lambda b: peaks[b.name])
+        report.goal(f"{tag} peak memory, worst {method} ({worst.name})", peaks[worst.name],
+                    GOAL_BYTES_PER_PIXEL, at_least=False, unit=" B/px")
+    for a, b in GROWTH_PAIRS:
+        report.goal(f"{tag} peak memory growth, {a.label} -> {b.label}", peaks[b.label] - peaks[a.label],
+                    GOAL_GROWTH_BYTES, at_least=False, unit=" B/px")
 
 
 # --------------------------------------------------------------------------- main
 def parse_args(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
-    parser.add_argument("--quick", action="store_true", help="256^2 and 512^2 (< 60 s), for smoke tests")
-    parser.add_argument("--repeats", type=int, default=3, help="median of N rounds (default 3)")
+    parser = _bench.parser(__doc__, quick="256^2 and 512^2 (< 60 s), for smoke tests", statistic="median")
     parser.add_argument("--radius", type=float, default=RADIUS, help=f"ball radius (default {RADIUS})")
-    args = parser.parse_args(argv)
-    if args.repeats < 1:
-        parser.error("--repeats must be >= 1")
+    args = _bench.parse(parser, argv)
     if not args.radius > 0:
         parser.error("--radius must be > 0")
     return args
@@ -471,20 +451,17 @@ def parse_args(argv):
 def main(argv=None) -> int:
     args = parse_args(argv)
     sizes = QUICK_SIZES if args.quick else FULL_SIZES
-    start = time.perf_counter()
-    machine_facts()
-    print(f"  mode: {'quick' if args.quick else 'full'}   repeats: median of {args.repeats}   "
-          f"sizes: {', '.join(f'{s}^2' for s in sizes)}")
-    warm_patterns()
-    area = find_area()
-    reads = count_reads(args.radius, area)
-    report = Report()
-    for size in sizes:
-        bench_size(size, args.radius, args.repeats, area, reads, report)
-    report.print_summary()
-    print(f"\n  total benchmark time {time.perf_counter() - start:.1f} s   "
-          f"load average now: {load_average()}")
-    return 0
+
+    def body(report):
+        machine_facts()
+        print(f"  mode: {'quick' if args.quick else 'full'}   repeats: median of {args.repeats}   "
+              f"sizes: {', '.join(f'{s}^2' for s in sizes)}")
+        warm_up(args.radius)
+        reads = count_reads(args.radius)
+        for size in sizes:
+            bench_size(size, args.radius, args.repeats, reads, report)
+
+    return _bench.run(body, Report())
 
 
 if __name__ == "__main__":
