@@ -1,64 +1,72 @@
-"""Helpers shared by the figure modules: atomic PNG and CSV output, image panels, timing.
+"""What the figure modules share beyond :mod:`vobscure.experiments.common`: the image panels,
+the figures' sizes, the writing of a figure with its CSV, and the ``python -m`` main of a
+measured figure.
 
-Not a figure itself (it is not in :data:`vobscure.experiments.figures.FIGURES`).
+The writers, the timer, the default radius and the machine record are those of
+:mod:`vobscure.experiments.common` (one copy for every experiment); this module holds what
+only figures need. Not a figure itself (it is not in
+:data:`vobscure.experiments.figures.FIGURES`).
 """
 
 from __future__ import annotations
 
-import csv
-import io
-import time
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["BACKGROUND", "new_figure", "save_figure", "write_csv", "image_panel",
-           "error_panel", "median_seconds", "corr", "fmt", "table_main"]
+from ..common import save_figure, write_csv
+
+__all__ = ["BACKGROUND", "FULL_SIZE", "CSV_DIGITS", "SCENE_NAMES", "size_for", "measurements",
+           "write_figure",
+           "image_panel", "error_panel", "corr", "fmt", "table_main"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
+#: Image size (width, height) of a figure of the paper's scenes, without ``quick``.
+FULL_SIZE = (256, 256)
+#: Significant digits of the floats in a figure's CSV.
+CSV_DIGITS = 6
+#: How a figure names a scene of :mod:`vobscure.scenes` in titles and tick labels.
+SCENE_NAMES = {"cornell_box": "Cornell box", "blob": "blob"}
 
 
-def new_figure(width: float, height: float, dpi: int = 100):
-    """A matplotlib ``Figure`` on the Agg canvas (never pyplot), constrained layout."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+def size_for(quick: bool, size=None, *, full=FULL_SIZE) -> tuple:
+    """The image size (width, height) of a figure: ``size`` when given, else ``full`` or, with
+    ``quick``, :data:`vobscure.experiments.claims.QUICK_SIZE` (48 x 48: the size of the
+    claims' quick measurements, which Figs. 5-7 share)."""
+    if size is not None:
+        return tuple(size)
+    if quick:
+        from ..claims import QUICK_SIZE
 
-    fig = Figure(figsize=(width, height), dpi=dpi, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def save_figure(fig, path) -> Path:
-    """Write ``fig`` as PNG to ``path`` atomically (temporary file, then rename)."""
-    from vobscure._io import atomic_write
-
-    return atomic_write(Path(path), lambda fh: fig.savefig(fh, format="png", dpi="figure"))
+        return tuple(QUICK_SIZE)
+    return tuple(full)
 
 
-def write_csv(path, rows, columns) -> Path:
-    """Write ``rows`` (dicts) with the given ``columns`` as CSV, atomically.
+def measurements(size, seed: int, quick: bool) -> dict:
+    """:func:`vobscure.experiments.claims.measurement` of every scene of
+    :data:`~vobscure.experiments.claims.SCENES`, by scene name (cached per process)."""
+    from .. import claims
 
-    Floats are written with 6 significant digits, None as an empty cell, booleans as 0 / 1.
+    return {scene: claims.measurement(scene, size=size, seed=seed, quick=quick) for scene in claims.SCENES}
+
+
+def write_figure(fig, out_dir, filename: str, rows=None, csv_filename: str | None = None,
+                 columns=None) -> list[Path]:
+    """Write ``fig`` as ``out_dir / filename`` (PNG) and, when ``rows`` are given, the rows as
+    ``out_dir / csv_filename`` with ``columns`` (floats to :data:`CSV_DIGITS` significant
+    digits, booleans 0 / 1, None empty); both atomically, ``out_dir`` created if missing.
+
+    Returns
+    -------
+    list of Path
+        ``[png]`` or ``[png, csv]``.
     """
-    from vobscure._io import atomic_write
-
-    def cell(value):
-        if value is None:
-            return ""
-        if isinstance(value, (bool, np.bool_)):
-            return str(int(value))
-        if isinstance(value, (float, np.floating)):
-            return f"{float(value):.6g}"
-        return str(value)
-
-    text = io.StringIO()
-    writer = csv.writer(text, lineterminator="\n")
-    writer.writerow(columns)
-    for row in rows:
-        writer.writerow([cell(row.get(c)) for c in columns])
-    data = text.getvalue().encode("utf-8")
-    return atomic_write(Path(path), lambda fh: fh.write(data))
+    out_dir = Path(out_dir)
+    paths = [save_figure(fig, out_dir / filename)]
+    if rows is not None:
+        paths.append(write_csv(out_dir / csv_filename, rows, columns, digits=CSV_DIGITS))
+    return paths
 
 
 def image_panel(ax, image, title=None, *, vmin=0.0, vmax=1.0, cmap="gray", fontsize=9.5):
@@ -79,23 +87,6 @@ def error_panel(ax, estimate, truth, title=None, *, limit=0.5, fontsize=9.5):
     """Signed error ``estimate - truth`` in a diverging map (blue: too open, red: too dark)."""
     diff = np.asarray(estimate, dtype=np.float64) - np.asarray(truth, dtype=np.float64)
     return image_panel(ax, diff, title, vmin=-limit, vmax=limit, cmap="RdBu", fontsize=fontsize)
-
-
-def median_seconds(functions: dict, runs: int) -> dict:
-    """Median wall seconds of each zero-argument callable, round-robin after one warm-up each.
-
-    Round-robin (all functions once, ``runs`` times) spreads a slow spell of a shared machine
-    over every function alike; the warm-up call builds cached sample patterns.
-    """
-    for f in functions.values():
-        f()
-    times = {k: [] for k in functions}
-    for _ in range(runs):
-        for k, f in functions.items():
-            t0 = time.perf_counter()
-            f()
-            times[k].append(time.perf_counter() - t0)
-    return {k: float(np.median(v)) for k, v in times.items()}
 
 
 def corr(a, b, mask=None) -> float:

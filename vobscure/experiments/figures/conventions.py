@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._common import BACKGROUND
+
 __all__ = ["make", "FILENAME", "CAMERA", "RADIUS"]
 
 #: Name of the one file :func:`make` writes.
@@ -45,7 +47,6 @@ _CHECK_C = {False: np.linspace(0.1, 1.0, 7), True: np.array([0.25, 0.6, 1.0])}
 _DPI = 110
 _SEED = 0
 
-_BACKGROUND = "#e377c2"     # one colour for background pixels in every image panel
 _SOLID = "#b8b8b8"          # the crease's solid in the sketches
 _OCCUPIED = "#5a5a5a"       # the occupied part of the ball
 _OPEN = "#cfe3f7"           # the unoccupied part of the ball
@@ -89,24 +90,23 @@ def make(out_dir, quick: bool = False) -> list[Path]:
     ...     [p.name for p in conventions.make(tmp, quick=True)]
     ['conventions.png']
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    import vobscure as vo
-    from vobscure._io import atomic_write
+    from ... import scenes
+    from ...camera import Camera
+    from ...gbuffer import render_gbuffer
+    from ...groundtruth import ground_truth
+    from ..common import new_figure
+    from ._common import write_figure
 
     quick = bool(quick)
-    out_dir = Path(out_dir)
-    scene = vo.scenes.crease()
-    cam = vo.Camera.look_at(CAMERA["eye"], CAMERA["target"], CAMERA["up"], size=_SIZE[quick],
-                            fov_y=CAMERA["fov_y"])
-    gb = vo.render_gbuffer(scene, cam)
-    ao = vo.ground_truth(scene, gb, quantity="ao", radius=RADIUS, rays=_AO_RAYS[quick],
-                         seed=_SEED, progress=False)
-    check = _crease_check(vo, scene, quick)
+    scene = scenes.crease()
+    cam = Camera.look_at(CAMERA["eye"], CAMERA["target"], CAMERA["up"], size=_SIZE[quick],
+                         fov_y=CAMERA["fov_y"])
+    gb = render_gbuffer(scene, cam)
+    ao = ground_truth(scene, gb, quantity="ao", radius=RADIUS, rays=_AO_RAYS[quick],
+                      seed=_SEED, progress=False)
+    check = _crease_check(scene, quick)
 
-    fig = Figure(figsize=(13.0, 13.6), dpi=_DPI, layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = new_figure(13.0, 13.6, dpi=_DPI)
     rows = fig.subfigures(3, 1, height_ratios=[1.15, 0.8, 1.0], hspace=0.02)
     top = rows[0].subplots(1, 2, width_ratios=[1.55, 1.0])
     _panel_spaces(top[0], cam, scene)
@@ -115,10 +115,7 @@ def make(out_dir, quick: bool = False) -> list[Path]:
     bottom = rows[2].subplots(1, 2, width_ratios=[1.0, 1.25])
     _panel_ball(bottom[0], scene)
     _panel_closed_forms(bottom[1], check, quick)
-
-    path = out_dir / FILENAME
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi="figure"))
-    return [path]
+    return write_figure(fig, out_dir, FILENAME)
 
 
 # ----------------------------------------------------------------------------- data
@@ -133,17 +130,19 @@ def _closed_forms(c):
     }
 
 
-def _crease_check(vo, scene, quick):
+def _crease_check(scene, quick):
     """Ray-cast values at floor points (a, 0, 0), a = c R, for panel (d)."""
+    from ...groundtruth import ambient_occlusion, volumetric_obscurance
+
     c = _CHECK_C[quick]
     points = np.stack([c * RADIUS, np.zeros_like(c), np.zeros_like(c)], axis=1)
     normals = np.tile([0.0, 1.0, 0.0], (len(c), 1))
-    ball = vo.volumetric_obscurance(scene, points, radius=RADIUS, samples=_CHECK_SAMPLES[quick],
-                                    seed=_SEED)
-    half = vo.volumetric_obscurance(scene, points, normals, radius=RADIUS,
-                                    samples=_CHECK_SAMPLES[quick], seed=_SEED + 1)
-    ao = vo.ambient_occlusion(scene, points, normals, rays=_CHECK_RAYS[quick], max_distance=RADIUS,
-                              seed=_SEED + 2)
+    ball = volumetric_obscurance(scene, points, radius=RADIUS, samples=_CHECK_SAMPLES[quick],
+                                 seed=_SEED)
+    half = volumetric_obscurance(scene, points, normals, radius=RADIUS, normal_clamp=True,
+                                 samples=_CHECK_SAMPLES[quick], seed=_SEED + 1)
+    ao = ambient_occlusion(scene, points, normals, rays=_CHECK_RAYS[quick], max_distance=RADIUS,
+                           seed=_SEED + 2)
     return {"c": c, "ball": ball, "half": half, "ao": ao}
 
 
@@ -333,14 +332,14 @@ def _panel_gbuffer(subfig, gb, ao):
     valid = gb.valid
 
     depth = np.ma.masked_invalid(np.where(valid, gb.depth, np.nan))
-    cmap = mpl.colormaps["viridis"].with_extremes(bad=_BACKGROUND)
+    cmap = mpl.colormaps["viridis"].with_extremes(bad=BACKGROUND)
     im = axes[0].imshow(depth, cmap=cmap, extent=extent, interpolation="nearest")
     subfig.colorbar(im, ax=axes[0], shrink=0.8, label="depth z (view space)")
     axes[0].set_title("gb.depth: linear view z\n(+inf on background)", fontsize=10)
 
     rgb = np.empty((H, W, 3))
     rgb[...] = 0.5 * (gb.normal + 1.0)
-    rgb[~valid] = mpl.colors.to_rgb(_BACKGROUND)
+    rgb[~valid] = mpl.colors.to_rgb(BACKGROUND)
     axes[1].imshow(rgb, extent=extent, interpolation="nearest")
     axes[1].set_title("gb.normal: view space, RGB = (n + 1) / 2\n(0 on background)", fontsize=10)
     # the two faces' normals, read from the buffer
@@ -350,7 +349,7 @@ def _panel_gbuffer(subfig, gb, ao):
                      ha="center", va="center", fontsize=8.5,
                      bbox={"fc": "white", "ec": "none", "alpha": 0.85, "pad": 1.5})
 
-    gray = mpl.colormaps["gray"].with_extremes(bad=_BACKGROUND)
+    gray = mpl.colormaps["gray"].with_extremes(bad=BACKGROUND)
     im = axes[2].imshow(np.ma.masked_invalid(ao.value), cmap=gray, vmin=0.0, vmax=1.0, extent=extent,
                         interpolation="nearest")
     subfig.colorbar(im, ax=axes[2], shrink=0.8, label="visibility (1 = open)")
@@ -360,7 +359,7 @@ def _panel_gbuffer(subfig, gb, ao):
     for ax in axes:
         ax.set_xlabel("column j (x)")
         ax.set_ylabel("row i (y)")
-    subfig.legend(handles=[Patch(fc=_BACKGROUND, ec="none", label="background (no hit)")],
+    subfig.legend(handles=[Patch(fc=BACKGROUND, ec="none", label="background (no hit)")],
                   loc="outside lower center", fontsize=9, frameon=False)
     subfig.suptitle(f"(c) a G-buffer of vo.scenes.crease() through the camera of (a), "
                     f"{W} x {H} pixels: images are (H, W) arrays, row 0 at the top",

@@ -53,7 +53,7 @@ def measure(quick: bool = False, *, seed: int = 0, cache=False):
     for scene in SCENES:
         res = compare(scene, size=size, methods=METHODS, references=("screen", "volumetric", "ao"),
                       normal_clamp=True,
-                      repeats=1, rays=32 if quick else 256, samples=64 if quick else 512,
+                      repeats=1, rays=32 if quick else 256, volume_samples=64 if quick else 512,
                       screen_samples=128 if quick else 2048, seed=seed, cache=cache, progress=False,
                       out=None, plots=False, write=False)
         rows += [dict(row, scene=scene) for row in res.rows]
@@ -83,10 +83,11 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False, rows=None)
     >>> FILENAME
     'error_decomposition.png'
     """
-    from . import _common
+    from ..common import new_figure
+    from ._common import write_figure
 
     rows = measure(quick, seed=seed, cache=cache) if rows is None else rows
-    fig = _common.new_figure(12, 4.2 * len(SCENES) + 0.4)
+    fig = new_figure(12, 4.2 * len(SCENES) + 0.4)
     axes = fig.subplots(len(SCENES), 2, squeeze=False)
     for i, scene in enumerate(SCENES):
         sel = [r for r in rows if r["scene"] == scene]
@@ -118,9 +119,7 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, cache=False, rows=None)
         ax.legend(fontsize=8)
     fig.suptitle("Half-ball VO, error decomposition: sampling (estimate - screen-space VO),\n"
                  "screen space (screen-space VO - world-space VO), model (world-space VO - AO)")
-    out = Path(out_dir)
-    return [_common.save_figure(fig, out / FILENAME),
-            _common.write_csv(out / CSV_FILENAME, rows, _COLUMNS)]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 def markdown(rows) -> str:

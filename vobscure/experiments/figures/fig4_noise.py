@@ -133,29 +133,34 @@ class _Setup:
 @lru_cache(maxsize=2)
 def _setup(size: tuple, seed: int, ref_samples: int, noise: bool) -> _Setup:
     """Computed once per process and settings (shared by :func:`measure` and :func:`make`)."""
-    import vobscure as vo
+    from ... import scenes
+    from ...gbuffer import render_gbuffer
+    from ...metrics import error
+    from ...screenspace import vo_line, vo_reference
+    from ..common import default_radius
 
-    scene = vo.scenes.get(_SCENE)
-    gb = vo.render_gbuffer(scene, scene.camera(size))
-    radius = 0.1 * scene.extent                      # claims.RADIUS_FRACTION
+    scene = scenes.get(_SCENE)
+    gb = render_gbuffer(scene, scene.camera(size))
+    radius = default_radius(scene)
     reference, limit, ref_noise = {}, {}, {}
     for nc in (False, True):
-        reference[nc] = vo.vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc, seed=seed).value
-        limit[nc] = vo.vo_line(gb, radius=radius, samples=LIMIT_LINES, normal_clamp=nc, randomize=False)
+        reference[nc] = vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc, seed=seed).value
+        limit[nc] = vo_line(gb, radius=radius, samples=LIMIT_LINES, normal_clamp=nc, randomize=False)
         ref_noise[nc] = None
         if noise:
             # two independent references: the RMS of their difference / sqrt(2) is one's noise
-            other = vo.vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc,
-                                    seed=seed + 1).value
-            ref_noise[nc] = vo.error(reference[nc], other).rmse / math.sqrt(2.0)
+            other = vo_reference(gb, radius=radius, samples=ref_samples, normal_clamp=nc,
+                                 seed=seed + 1).value
+            ref_noise[nc] = error(reference[nc], other).rmse / math.sqrt(2.0)
     return _Setup(gb, radius, reference, limit, ref_noise)
 
 
 def _settings(quick: bool, size, seed, seeds):
-    from vobscure._validate import check_int
+    from ..._validate import check_int
+    from ._common import size_for
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else ((48, 48) if quick else (256, 256))
+    size = size_for(quick, size)
     if len(size) != 2:
         raise ValueError(f"size must be (width, height), got {size!r}")
     size = tuple(check_int(s, "size") for s in size)
@@ -166,7 +171,7 @@ def _settings(quick: bool, size, seed, seeds):
 
 def _pattern(estimator: str, n: int, method: str, variant: str, seed: int):
     """The pattern of one row: the electrostatic table entry (seed 0), else the seed's draw."""
-    from vobscure import patterns as P
+    from ... import patterns as P
 
     make = P.disk if estimator == "line" else P.ball
     kwargs = {"symmetric": variant == "symmetric"}
@@ -176,10 +181,10 @@ def _pattern(estimator: str, n: int, method: str, variant: str, seed: int):
 
 
 def _estimate(setup: _Setup, estimator: str, pattern, normal_clamp: bool):
-    import vobscure as vo
+    from ... import methods
 
-    f = vo.vo_line if estimator == "line" else vo.vo_point
-    return f(setup.gb, radius=setup.radius, samples=pattern, normal_clamp=normal_clamp, randomize=False)
+    return methods.get(estimator).run(setup.gb, pattern, radius=setup.radius, normal_clamp=normal_clamp,
+                                      randomize=False)
 
 
 # ----------------------------------------------------------------------------- data
@@ -215,13 +220,13 @@ def measure(quick: bool = False, *, size=None, seed: int = 0, seeds=None, line_c
         against the limit, and the ``verdict`` of :func:`goal`'s rule against ``target``
         (:data:`GOAL`).
     """
+    from ...metrics import error
+
     quick, size, seed, seeds = _settings(quick, size, seed, seeds)
     counts = {"line": tuple(LINE_COUNTS[quick] if line_counts is None else line_counts),
               "point": tuple(POINT_COUNTS[quick] if point_counts is None else point_counts)}
     ref_samples = REFERENCE_SAMPLES[quick]
     setup = _setup(size, seed, ref_samples, not quick)
-    import vobscure as vo
-
     rows = []
     for estimator in ("line", "point"):
         for variant in VARIANTS[estimator]:
@@ -238,7 +243,7 @@ def measure(quick: bool = False, *, size=None, seed: int = 0, seeds=None, line_c
                             e_lim = _rmse_bias(v, lim)[0]
                             errors.setdefault((method, nc), []).append((rmse, bias, e_lim, pixels))
                 for nc in (False, True):
-                    lim_ref = (vo.error(setup.limit[nc], setup.reference[nc]).rmse
+                    lim_ref = (error(setup.limit[nc], setup.reference[nc]).rmse
                                if estimator == "line" else 0.0)
                     base = None
                     for method in METHODS:
@@ -394,7 +399,8 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, rows=None) -
     >>> fig4_noise.FILENAME, fig4_noise.GOAL["random"]
     ('fig4_noise.png', 0.7)
     """
-    from ._common import new_figure, save_figure, write_csv
+    from ..common import new_figure
+    from ._common import write_figure
 
     quick, size, seed, _ = _settings(quick, size, seed, None)
     rows = measure(quick, size=size, seed=seed) if rows is None else list(rows)
@@ -411,16 +417,11 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, rows=None) -
     fig.suptitle(f"Loos & Sloan 2010, Fig. 4 / Sec. 4.5: sample patterns without per-pixel randomization "
                  f"(Cornell box, {w} x {h}, R = {setup.radius:.3g} = 0.1 x extent, half-ball; random and "
                  f"Sobol' over {k} seeds{', quick' if quick else ''})", fontsize=13)
-
-    out_dir = Path(out_dir)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows, _COLUMNS)
-    return [png, csv]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 def _image_rows(subfig, setup, rows, estimator, nc, seed):
-    import vobscure as vo
-
+    from ...metrics import error
     from ._common import error_panel, fmt, image_panel
 
     by = {(r["method"], r["samples"]): r for r in rows if r["estimator"] == estimator
@@ -433,7 +434,7 @@ def _image_rows(subfig, setup, rows, estimator, nc, seed):
         if i == 0:
             im = image_panel(first, ref, "converged screen-space VO\n(vo_reference)", fontsize=9)
         elif estimator == "line":
-            lim_rmse = vo.error(setup.limit[nc], ref).rmse
+            lim_rmse = error(setup.limit[nc], ref).rmse
             image_panel(first, setup.limit[nc], f"lines' limit ({LIMIT_LINES} lines)\n"
                                                 f"RMSE {fmt(lim_rmse, 4)}", fontsize=9)
         else:
@@ -442,7 +443,7 @@ def _image_rows(subfig, setup, rows, estimator, nc, seed):
             p = _pattern(estimator, n, method, "symmetric", seed)
             v = _estimate(setup, estimator, p, nc)
             r = by[(method, n)]
-            shown = vo.error(v, ref).rmse
+            shown = error(v, ref).rmse
             if method == "electrostatic":
                 stat = "table pattern (seed 0)"
             else:
@@ -529,7 +530,7 @@ def _f(x, digits=4) -> str:
 
 def markdown(rows, *, command=None, seconds=None) -> str:
     """The tables of ``docs/patterns_results.md``, section "Effect on images (Fig. 4)"."""
-    from vobscure.experiments.claims import machine
+    from ..common import machine
 
     info = machine()
     first = rows[0]

@@ -99,12 +99,12 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0,
     >>> fig5_thickness.FILENAME
     'fig5_thickness.png'
     """
-    from vobscure.experiments import claims as C
-
-    from ._common import new_figure, save_figure, write_csv
+    from .. import claims as C
+    from ..common import new_figure
+    from ._common import size_for, write_figure
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else (C.QUICK_SIZE if quick else (256, 256))
+    size = size_for(quick, size)
     m = C.measurement(_SCENE, size=size, seed=seed, quick=quick)
     width = max(1, int(round(min(size) / 128)))   # "a few pixels", as in claims
     band, far = C.silhouette_mask(m.gb.depth, width=width)
@@ -118,25 +118,20 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0,
     fig.suptitle(f"Loos & Sloan 2010, Fig. 5 / Sec. 4.3: the thickness model at silhouettes "
                  f"(Cornell box, {w} x {h}, R = {m.radius:.3g} = 0.1 x extent, seed {seed}"
                  f"{', quick' if quick else ''})", fontsize=13)
-
-    out_dir = Path(out_dir)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows, _COLUMNS)
-    return [png, csv]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 # ----------------------------------------------------------------------------- data
 def _estimate(gb, method, samples, *, radius, normal_clamp, thickness, seed):
-    import vobscure as vo
+    from ... import methods
 
-    f = vo.vo_line if method == "line" else vo.vo_area
-    return f(gb, radius=radius, samples=samples, normal_clamp=normal_clamp, thickness=thickness,
-             seed=seed)
+    return methods.get(method).run(gb, samples, radius=radius, normal_clamp=normal_clamp,
+                                   thickness=thickness, seed=seed)
 
 
 def _sweep(m, band, far, factors, seed, normal_clamp_shown):
     """Error rows for every (method, normal_clamp, thickness) and the images of panel (a)."""
-    import vobscure as vo
+    from ...metrics import error
 
     rows, shown = [], {}
     for label, method, samples in METHODS:
@@ -146,7 +141,7 @@ def _sweep(m, band, far, factors, seed, normal_clamp_shown):
                 t = None if f is None else f * m.radius
                 v = _estimate(m.gb, method, samples, radius=m.radius, normal_clamp=nc, thickness=t,
                               seed=seed)
-                e_band, e_far, e_all = (vo.error(v, truth, mask=k) for k in (band, far, None))
+                e_band, e_far, e_all = (error(v, truth, mask=k) for k in (band, far, None))
                 rows.append({"method": label, "samples": samples, "normal_clamp": nc, "factor": f,
                              "thickness": t, "rmse_band": e_band.rmse, "bias_band": e_band.bias,
                              "rmse_far": e_far.rmse, "bias_far": e_far.bias, "rmse_all": e_all.rmse,
@@ -164,16 +159,15 @@ def _sweep(m, band, far, factors, seed, normal_clamp_shown):
 def _images(top, bottom, m, shown, rows, band, far, nc):
     import matplotlib as mpl
 
+    from ...metrics import error
     from ._common import BACKGROUND, error_panel, fmt, image_panel
-
-    import vobscure as vo
 
     truth = m.truth[nc]
     panels = []
     for label, _, _ in METHODS:
         for f in (None, THICKNESS_SHOWN):
             v = shown[(label, f)]
-            e_band, e_far = vo.error(v, truth.value, mask=band), vo.error(v, truth.value, mask=far)
+            e_band, e_far = error(v, truth.value, mask=band), error(v, truth.value, mask=far)
             what = "thickness off" if f is None else f"thickness {f:g} R"
             panels.append((label, f, v, f"{label}, {what}\nband RMSE {fmt(e_band.rmse)}, "
                                         f"far-side bias {e_far.bias:+.3f}"))

@@ -60,7 +60,6 @@ CSV_RANGES = {"normal_clamp": (0, 1), "samples": (1, 64), "corr_ao": (-1.0, 1.0)
 _COLUMNS = ("scene", "config", "samples", "normal_clamp", "corr_ao", "corr_ao_blurred", "gt_corr_ao",
             "rmse_gt", "rmse_gt_blurred", "bias_gt", "rmse_ref", "std_estimate", "std_gt")
 _COLORS = {False: "#9ecae1", True: "#08519c"}
-_NAMES = {"cornell_box": "Cornell box", "blob": "blob"}
 
 
 def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path]:
@@ -89,13 +88,12 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path
     >>> fig6_normals.FILENAME
     'fig6_normals.png'
     """
-    from vobscure.experiments import claims as C
-
-    from ._common import new_figure, save_figure, write_csv
+    from ..common import new_figure
+    from ._common import measurements, size_for, write_figure
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else (C.QUICK_SIZE if quick else (256, 256))
-    data = {s: C.measurement(s, size=size, seed=seed, quick=quick) for s in C.SCENES}
+    size = size_for(quick, size)
+    data = measurements(size, seed, quick)
     rows, blurred = _rows(data)
 
     fig = new_figure(18.0, 13.0)
@@ -107,17 +105,13 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path
     fig.suptitle(f"Loos & Sloan 2010, Fig. 6 / Sec. 4.4: the normal off (ball) and on (half-ball), "
                  f"lines and points ({w} x {h}, R = 0.1 x extent, seed {seed}"
                  f"{', quick' if quick else ''})", fontsize=13)
-
-    out_dir = Path(out_dir)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows, _COLUMNS)
-    return [png, csv]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 # ----------------------------------------------------------------------------- data
 def _rows(data):
-    import vobscure as vo
-
+    from ...metrics import error
+    from ...screenspace import bilateral_blur
     from ._common import corr
 
     rows, blurred = [], {}
@@ -126,14 +120,14 @@ def _rows(data):
         for config in BAR_CONFIGS:
             for nc in (False, True):
                 v = m.images[(config, nc)]
-                b = vo.bilateral_blur(v, m.gb)
+                b = bilateral_blur(v, m.gb)
                 blurred[(scene, config, nc)] = b
                 truth = m.truth[nc].value
                 r = by[(config, nc)]
                 rows.append({"scene": scene, "config": config, "samples": r["samples"],
                              "normal_clamp": nc, "corr_ao": corr(v, m.ao.value),
                              "corr_ao_blurred": corr(b, m.ao.value), "gt_corr_ao": corr(truth, m.ao.value),
-                             "rmse_gt": r["rmse_gt"], "rmse_gt_blurred": vo.error(b, truth).rmse,
+                             "rmse_gt": r["rmse_gt"], "rmse_gt_blurred": error(b, truth).rmse,
                              "bias_gt": r["bias_gt"], "rmse_ref": r["rmse_ref"],
                              "std_estimate": float(np.nanstd(v)), "std_gt": float(np.nanstd(truth))})
     return rows, blurred
@@ -141,7 +135,7 @@ def _rows(data):
 
 # ----------------------------------------------------------------------------- drawing
 def _image_row(subfig, scene, m, rows, blurred, letter):
-    from ._common import corr, fmt, image_panel
+    from ._common import SCENE_NAMES, corr, fmt, image_panel
 
     by = {(r["config"], r["normal_clamp"]): r for r in rows if r["scene"] == scene}
     panels = []
@@ -162,7 +156,7 @@ def _image_row(subfig, scene, m, rows, blurred, letter):
     subfig.colorbar(im, ax=axes, shrink=0.85, label="visibility (1 = open)")
     contrast = ", ".join(f"{'half-ball' if nc else 'ball'} {np.nanstd(m.truth[nc].value):.3f}"
                          for nc in (False, True))
-    subfig.suptitle(f"({letter}) {_NAMES.get(scene, scene)}: one frame each after the edge-aware blur; "
+    subfig.suptitle(f"({letter}) {SCENE_NAMES.get(scene, scene)}: one frame each after the edge-aware blur; "
                     f"R = {m.radius:.3g}; all shown on 0-1 (standard deviation of the truth over "
                     f"pixels: {contrast})", fontsize=11)
 
@@ -170,6 +164,8 @@ def _image_row(subfig, scene, m, rows, blurred, letter):
 def _bars(subfig, rows, letters):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
+
+    from ._common import SCENE_NAMES
 
     axes = subfig.subplots(1, 2)
     groups = list(dict.fromkeys((r["scene"], r["config"]) for r in rows))
@@ -190,7 +186,7 @@ def _bars(subfig, rows, letters):
                 ax.plot(xs, [by[g + (nc,)]["gt_corr_ao"] for g in groups], "_", color="#d62728",
                         ms=16, mew=2.5, zorder=4)
         ax.set_xticks(x)
-        ax.set_xticklabels([f"{c}\n{_NAMES.get(s, s)}" for s, c in groups], fontsize=9)
+        ax.set_xticklabels([f"{c}\n{SCENE_NAMES.get(s, s)}" for s, c in groups], fontsize=9)
         for boundary in range(1, len(groups)):
             if groups[boundary][0] != groups[boundary - 1][0]:
                 ax.axvline(boundary - 0.5, color="0.5", lw=1.0)

@@ -67,16 +67,6 @@ _COLUMNS = ("scene", "method", "samples", "normal_clamp", "taps_per_pixel", "ms"
 _COLORS = {"line": "#1f77b4", "point": "#d62728"}
 
 
-def _taps(method: str, n: int) -> int:
-    """Depth taps per pixel (:func:`vobscure.screenspace.point_taps` for points)."""
-    from ...screenspace import point_taps
-
-    return point_taps(n) if method == "point" else n
-
-
-_NAMES = {"cornell_box": "Cornell box", "blob": "blob"}
-
-
 def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path]:
     """Draw ``fig7_lines_vs_points.png`` and write ``fig7_lines_vs_points.csv``.
 
@@ -104,13 +94,12 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path
     >>> fig7_lines_vs_points.FILENAME
     'fig7_lines_vs_points.png'
     """
-    from vobscure.experiments import claims as C
-
-    from ._common import new_figure, save_figure, write_csv
+    from ..common import new_figure
+    from ._common import measurements, size_for, write_figure
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else (C.QUICK_SIZE if quick else (256, 256))
-    data = {s: C.measurement(s, size=size, seed=seed, quick=quick) for s in C.SCENES}
+    size = size_for(quick, size)
+    data = measurements(size, seed, quick)
     rows, frames = _sweep(data, quick, seed)
 
     fig = new_figure(17.0, 13.5)
@@ -121,40 +110,35 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path
     fig.suptitle(f"Loos & Sloan 2010, Fig. 7 / Sec. 5.1: line samples against point samples, "
                  f"quality and time ({w} x {h}, R = 0.1 x extent, seed {seed}, NumPy on the CPU"
                  f"{', quick' if quick else ''})", fontsize=13)
-
-    out_dir = Path(out_dir)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows, _COLUMNS)
-    return [png, csv]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 # ----------------------------------------------------------------------------- data
 def _sweep(data, quick, seed):
     """Time and error of every (scene, method, samples, normal_clamp); the frames of (a), (b)."""
-    import vobscure as vo
+    from ... import methods
+    from ...metrics import error
+    from ...screenspace import bilateral_blur
+    from ..common import time_calls
 
-    from ._common import median_seconds
-
+    configs = ([methods.Config("line", n) for n in LINE_SAMPLES[quick]] +
+               [methods.Config("point", n) for n in POINT_SAMPLES[quick]])
     rows, frames = [], {}
     for scene, m in data.items():
         for nc in (False, True):
-            configs = ([("line", n) for n in LINE_SAMPLES[quick]] +
-                       [("point", n) for n in POINT_SAMPLES[quick]])
+            def frame(c, gb=m.gb, r=m.radius, nc=nc):
+                return lambda: c.run(gb, radius=r, normal_clamp=nc, seed=seed)
 
-            def runner(method, n, nc=nc, gb=m.gb, r=m.radius):
-                f = vo.vo_line if method == "line" else vo.vo_point
-                return lambda: f(gb, radius=r, samples=n, normal_clamp=nc, seed=seed)
-
-            seconds = median_seconds({c: runner(*c) for c in configs}, TIMING_RUNS[quick])
+            timings, images = time_calls({c: frame(c) for c in configs}, TIMING_RUNS[quick])
             ref, truth = m.reference[nc], m.truth[nc].value
-            for method, n in configs:
-                v = runner(method, n)()
-                b = vo.bilateral_blur(v, m.gb)
-                e_ref = vo.error(v, ref)
+            for c in configs:
+                method, n, v = c.method, c.samples, images[c]
+                b = bilateral_blur(v, m.gb)
+                e_ref = error(v, ref)
                 rows.append({"scene": scene, "method": method, "samples": n, "normal_clamp": nc,
-                             "taps_per_pixel": _taps(method, n), "ms": 1000.0 * seconds[(method, n)],
-                             "rmse_ref": e_ref.rmse, "rmse_ref_blurred": vo.error(b, ref).rmse,
-                             "bias_ref": e_ref.bias, "rmse_gt": vo.error(v, truth).rmse})
+                             "taps_per_pixel": c.taps, "ms": 1000.0 * timings[c].median,
+                             "rmse_ref": e_ref.rmse, "rmse_ref_blurred": error(b, ref).rmse,
+                             "bias_ref": e_ref.bias, "rmse_gt": error(v, truth).rmse})
                 if scene == "cornell_box" and nc and any(n in p for p in PAIRS):
                     frames[(method, n)] = (v, b)
     return rows, frames
@@ -162,8 +146,7 @@ def _sweep(data, quick, seed):
 
 # ----------------------------------------------------------------------------- drawing
 def _image_rows(top, bottom, m, rows, frames):
-    import vobscure as vo
-
+    from ...metrics import error
     from ._common import fmt, image_panel
 
     by = {(r["method"], r["samples"]): r for r in rows if r["scene"] == "cornell_box" and r["normal_clamp"]}
@@ -183,7 +166,7 @@ def _image_rows(top, bottom, m, rows, frames):
                                        f"{m.settings['ref_samples']} samples")
         else:
             image_panel(axes[-1], truth.value, f"Embree ground truth\nRMSE of the converged "
-                                               f"{fmt(vo.error(ref, truth.value).rmse, 4)}")
+                                               f"{fmt(error(ref, truth.value).rmse, 4)}")
         subfig.colorbar(im, ax=axes, shrink=0.85, label="visibility (1 = open)")
         what = ("one frame, no blur" if k == 0 else
                 "the same frames after the edge-aware blur (vo.bilateral_blur, defaults)")
@@ -194,6 +177,8 @@ def _image_rows(top, bottom, m, rows, frames):
 def _curves(subfig, rows, scenes):
     from matplotlib.lines import Line2D
     from matplotlib.ticker import FormatStrFormatter, LogLocator
+
+    from ._common import SCENE_NAMES
 
     panels = [(s, nc) for s in scenes for nc in (False, True)]
     axes = subfig.subplots(1, len(panels))
@@ -221,7 +206,7 @@ def _curves(subfig, rows, scenes):
         ax.grid(True, which="both", color="0.9", lw=0.6)
         ax.set_xlabel("median ms per frame (log)")
         ax.set_ylabel("RMSE vs converged screen-space VO (log)")
-        ax.set_title(f"({letter}) {_NAMES.get(scene, scene)}, {'half-ball' if nc else 'ball'}",
+        ax.set_title(f"({letter}) {SCENE_NAMES.get(scene, scene)}, {'half-ball' if nc else 'ball'}",
                      fontsize=11)
     counts = {m: sorted({r["samples"] for r in rows if r["method"] == m}) for m in ("line", "point")}
     handles = [Line2D([], [], color=_COLORS["line"], marker="o", ms=4,

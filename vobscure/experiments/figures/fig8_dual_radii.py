@@ -101,31 +101,34 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, radii=RADII,
     >>> fig8_dual_radii.FILENAME
     'fig8_dual_radii.png'
     """
-    import vobscure as vo
-
-    from ._common import new_figure, save_figure, write_csv
+    from ... import scenes
+    from ...gbuffer import render_gbuffer
+    from ...groundtruth import ground_truth
+    from ...screenspace import bilateral_blur, combine_radii, vo_line
+    from ..common import new_figure
+    from ._common import size_for, write_figure
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else ((48, 48) if quick else (256, 256))
+    size = size_for(quick, size)
     small, large = (float(f) for f in radii)
     if not 0.0 < small < large:
         raise ValueError(f"radii must be (small, large) with 0 < small < large, got {radii!r}")
-    scene = vo.scenes.get(_SCENE)
-    gb = vo.render_gbuffer(scene, scene.camera(size))
+    scene = scenes.get(_SCENE)
+    gb = render_gbuffer(scene, scene.camera(size))
     r = {"small": small * scene.extent, "large": large * scene.extent}
     est, truth = {}, {}
     for k, name in enumerate(("small", "large")):
-        v = vo.vo_line(gb, radius=r[name], samples=SAMPLES, normal_clamp=normal_clamp, seed=seed)
-        est[name] = vo.bilateral_blur(v, gb) if blur else v
-        truth[name] = vo.ground_truth(scene, gb, quantity="volumetric", radius=r[name],
+        v = vo_line(gb, radius=r[name], samples=SAMPLES, normal_clamp=normal_clamp, seed=seed)
+        est[name] = bilateral_blur(v, gb) if blur else v
+        truth[name] = ground_truth(scene, gb, quantity="volumetric", radius=r[name],
                                       samples=_GT_SAMPLES[quick], normal_clamp=normal_clamp,
                                       seed=seed + k, progress=False)
-    ao = vo.ground_truth(scene, gb, quantity="ao", radius=r["large"], rays=_AO_RAYS[quick],
+    ao = ground_truth(scene, gb, quantity="ao", radius=r["large"], rays=_AO_RAYS[quick],
                          seed=seed + 2, progress=False)
     truth_img = {"small": truth["small"].value, "large": truth["large"].value}
     for mode in MODES:
-        est[mode] = vo.combine_radii(est["small"], est["large"], mode=mode)
-        truth_img[mode] = vo.combine_radii(truth_img["small"], truth_img["large"], mode=mode)
+        est[mode] = combine_radii(est["small"], est["large"], mode=mode)
+        truth_img[mode] = combine_radii(truth_img["small"], truth_img["large"], mode=mode)
     rows = _rows(est, truth_img, ao.value, r)
 
     fig = new_figure(17.0, 13.0)
@@ -138,23 +141,18 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, radii=RADII,
     fig.suptitle(f"Loos & Sloan 2010, Fig. 8 / Sec. 6: dual radii on the Cornell box ({w} x {h}, "
                  f"{'half-ball' if normal_clamp else 'ball'} VO, r = {small:g} and {large:g} x extent, "
                  f"lines {SAMPLES}, seed {seed}{', quick' if quick else ''})", fontsize=13)
-
-    out_dir = Path(out_dir)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows, _COLUMNS)
-    return [png, csv]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 # ----------------------------------------------------------------------------- data
 def _rows(est, truth, ao, r):
-    import vobscure as vo
-
+    from ...metrics import error
     from ._common import corr
 
     rows = []
     for kind in _KINDS:
         for is_truth, img in ((False, est[kind]), (True, truth[kind])):
-            e = vo.error(img, truth[kind])
+            e = error(img, truth[kind])
             rows.append({"image": kind, "truth": is_truth, "radius": r.get(kind),
                          "radius_large": r["large"], "mean": float(np.nanmean(img)),
                          "corr_small_truth": corr(img, truth["small"]),

@@ -66,7 +66,6 @@ FIT_FROM = 3
 
 _COLORS = {"electrostatic": "#d62728", "lloyd": "#1f77b4", "poisson": "#2ca02c", "sobol": "#9467bd",
            "halton": "#8c564b", "random": "#7f7f7f", "spiral": "#ff7f0e"}
-_DPI = 100
 # (full, quick)
 _TRIALS = {False: None, True: 1024}              # None: the tables' QUALITY_TRIALS
 _METHODS = {False: None, True: ("electrostatic", "sobol", "random")}
@@ -102,7 +101,7 @@ def measure(quick: bool = False, *, methods=None, trials=None, seed=None, family
         ``{family_key: {method: Family}}`` for the keys of :data:`PANELS`, plus
         ``"settings"``: trials, seed and the source of every pattern (table or generated).
     """
-    from vobscure import patterns as P
+    from ... import patterns as P
 
     quick = bool(quick)
     methods = tuple(methods or _METHODS[quick] or P.METHODS)
@@ -358,14 +357,11 @@ def make(out_dir, quick: bool = False, *, data=None) -> list[Path]:
     ...     [p.name for p in patterns_quality.make(tmp, quick=True)]
     ['patterns_quality.png']
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from vobscure._io import atomic_write
+    from ..common import new_figure
+    from ._common import write_figure
 
     data = measure(quick) if data is None else data
-    fig = Figure(figsize=(16.0, 14.0), dpi=_DPI, layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = new_figure(16.0, 14.0)
     axes = fig.subplots(3, 3)
     titles = {
         (0, 0): ("disk-center", None, "(a) disk, centre forced (plain), line sampling"),
@@ -413,9 +409,7 @@ def make(out_dir, quick: bool = False, *, data=None) -> list[Path]:
     fig.suptitle(f"Sample-pattern quality: RMS error of the VO estimate over random planes and creases "
                  f"(vobscure.patterns.quality, {s['trials']} trials, seed {s['seed']}); error bars 2 stderr",
                  fontsize=12)
-    path = Path(out_dir) / FILENAME
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi="figure"))
-    return [path]
+    return write_figure(fig, out_dir, FILENAME)
 
 
 def main(argv=None) -> int:

@@ -11,12 +11,14 @@ One PNG, ``screenspace_claims.png``, that goes with ``docs/results.md``:
 (d) the same RMSE over depth taps per pixel (the machine-independent cost);
 (e) RMSE against the ground truth (sampling plus screen-space model error) over seconds.
 
-The numbers come from :func:`vobscure.experiments.claims.line_vs_point`; within one process
-they are the numbers the CLI prints (``python -m vobscure.experiments.claims --figure DIR``).
+The numbers come from :func:`vobscure.experiments.claims.line_vs_point` (cached per process:
+drawn after the claims' tables, they are the numbers the tables show).
 
 Regenerate with::
 
-    python -m vobscure.experiments.claims --figure docs/img
+    python -m vobscure.experiments.figures.screenspace_claims --out docs/img
+
+(``--quick``: 48 x 48 in seconds; ``vobscure figures screenspace_claims`` draws the same).
 """
 
 from __future__ import annotations
@@ -25,13 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "FILENAME"]
+__all__ = ["make", "main", "FILENAME"]
 
 #: Name of the one file :func:`make` writes.
 FILENAME = "screenspace_claims.png"
 
-_DPI = 100
-_BACKGROUND = "#e377c2"     # background pixels (none in the Cornell box; kept for other scenes)
 _COLORS = {"lines 5": "#1f77b4", "lines 9": "#17becf", "points 12": "#d62728", "points 33": "#ff7f0e",
            "points 12 nearest": "#9467bd", "points 33 nearest": "#8c564b", "area 1": "#2ca02c"}
 _MARKERS = {"cornell_box": "o", "blob": "s"}
@@ -64,19 +64,16 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path
     ...     [p.name for p in screenspace_claims.make(tmp, quick=True, size=(16, 16))]
     ['screenspace_claims.png']
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from vobscure._io import atomic_write
-    from vobscure.experiments import claims as C
+    from .. import claims as C
+    from ..common import new_figure
+    from ._common import size_for, write_figure
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else (C.QUICK_SIZE if quick else (256, 256))
+    size = size_for(quick, size)
     rows = [r for s in C.SCENES for r in C.line_vs_point(s, size=size, seed=seed, quick=quick)]
     cornell = C.measurement("cornell_box", size=size, seed=seed, quick=quick)
 
-    fig = Figure(figsize=(16.0, 13.2), dpi=_DPI, layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = new_figure(16.0, 13.2)
     parts = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 1.25], hspace=0.03)
     for k, nc in enumerate((False, True)):
         _image_row(parts[k], cornell, rows, nc, "ab"[k])
@@ -84,16 +81,29 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path
     fig.suptitle(f"Loos & Sloan 2010, Table 1 / Sec. 5.1 on the CPU: lines 5 and 9 against points 12 "
                  f"and 33 ({size[0]} x {size[1]}, radius 0.1 x scene extent, seed {seed}"
                  f"{', quick' if quick else ''})", fontsize=13)
+    return write_figure(fig, out_dir, FILENAME)
 
-    path = Path(out_dir) / FILENAME
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi="figure"))
-    return [path]
+
+def main(argv=None) -> int:
+    """``python -m vobscure.experiments.figures.screenspace_claims --out DIR [--quick] [--seed N]``:
+    measure both scenes (:func:`vobscure.experiments.claims.line_vs_point`) and draw the figure."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.screenspace_claims",
+                                 description=__doc__.splitlines()[0])
+    ap.add_argument("--out", required=True, help="directory of the PNG")
+    ap.add_argument("--quick", action="store_true", help="48 x 48 and fewer reference samples (seconds)")
+    ap.add_argument("--size", type=int, nargs=2, metavar=("W", "H"), help="image size (default 256 256)")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    for path in make(args.out, quick=args.quick, size=args.size, seed=args.seed):
+        print(f"wrote {path}")
+    return 0
 
 
 def _image_row(subfig, m, rows, normal_clamp, letter):
-    import matplotlib as mpl
+    from ._common import image_panel
 
-    gray = mpl.colormaps["gray"].with_extremes(bad=_BACKGROUND)
     by = {r["config"]: r for r in rows if r["scene"] == "cornell_box" and r["normal_clamp"] == normal_clamp}
     panels = [(c, m.images[(c, normal_clamp)],
                f"{c}: {by[c]['taps_per_pixel']} taps/px, {1000 * by[c]['seconds']:.0f} ms\n"
@@ -106,10 +116,7 @@ def _image_row(subfig, m, rows, normal_clamp, letter):
                    f"Embree ground truth, {truth.samples} pts\nmean stderr {np.nanmean(truth.stderr):.4f}"))
     axes = subfig.subplots(1, len(panels))
     for ax, (_, img, title) in zip(axes, panels):
-        im = ax.imshow(np.ma.masked_invalid(img), cmap=gray, vmin=0.0, vmax=1.0, interpolation="nearest")
-        ax.set_title(title, fontsize=9.5)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        im = image_panel(ax, img, title)
     subfig.colorbar(im, ax=axes, shrink=0.85, label="visibility (1 = open)")
     what = ("half-ball VO (normal_clamp=True)" if normal_clamp
             else "ball VO (normal_clamp=False): the truth is brighter because the walls are only 0.1 thick")
@@ -119,8 +126,9 @@ def _image_row(subfig, m, rows, normal_clamp, letter):
 
 def _scatter_row(subfig, rows):
     from matplotlib.lines import Line2D
-
     from matplotlib.ticker import FormatStrFormatter, LogLocator
+
+    from ._common import SCENE_NAMES
 
     axes = subfig.subplots(1, 3)
     specs = [("ms", "rmse_ref", "(c) error against the converged screen-space VO, over time",
@@ -159,10 +167,14 @@ def _scatter_row(subfig, rows):
     configs = list(dict.fromkeys(r["config"] for r in rows))
     handles = [Line2D([], [], ls="", marker="o", ms=8, color=_COLORS.get(c, "0.4"), label=c) for c in configs]
     handles += [Line2D([], [], ls="", marker=_MARKERS.get(s, "^"), ms=8, mfc="0.3", mec="0.3",
-                       label={"cornell_box": "Cornell box", "blob": "blob"}.get(s, s))
+                       label=SCENE_NAMES.get(s, s))
                 for s in dict.fromkeys(r["scene"] for r in rows)]
     handles += [Line2D([], [], ls="", marker="o", ms=8, mfc="0.3", mec="0.3", label="ball (filled)"),
                 Line2D([], [], ls="", marker="o", ms=8, mfc="white", mec="0.3", mew=1.8,
                        label="half-ball (hollow)"),
                 Line2D([], [], color="0.75", lw=1.0, label="claim pairs: lines 5-points 12, lines 9-points 33")]
     subfig.legend(handles=handles, loc="outside lower center", ncol=6, fontsize=9.5, frameon=False)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

@@ -12,10 +12,11 @@ Rows of the table:
 - the paper's, :data:`PAPER_TABLE1` (Dragon, Dragon with double radii, Cornell, Soldiers,
   Knight and the average over the four single-radius scenes; the bilateral blur's median
   2.23 ms, :data:`PAPER_BLUR_MS`, in the average row);
-- this library's, at :data:`SIZE` (1024 x 1024, the paper's resolution; 48 x 48 with
-  ``quick``): the Cornell box and the blob through their own cameras, radius 0.1 x the
-  scene's extent, and the Cornell box with dual radii (each estimator run at the two radii
-  of :data:`vobscure.experiments.figures.fig8_dual_radii.RADII` and combined with
+- this library's, at :data:`PAPER_RESOLUTION` (1024 x 1024; 48 x 48 with ``quick``): the
+  Cornell box and the blob through their own cameras, radius 0.1 x the scene's extent
+  (:data:`vobscure.experiments.common.RADIUS_FRACTION`), and the Cornell box with dual
+  radii (each estimator run at the two radii of
+  :data:`vobscure.experiments.figures.fig8_dual_radii.RADII` and combined with
   ``vo.combine_radii(mode="product")``; its ratios, like the paper's Dragon*, are to the
   single-radius ``points 12`` of the same scene).
 
@@ -48,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "PAPER_TABLE1", "PAPER_BLUR_MS",
-           "PAPER_RESOLUTION", "COLUMNS", "BASELINE", "SIZE", "TIMING_RUNS", "paper_ratios"]
+           "PAPER_RESOLUTION", "COLUMNS", "BASELINE", "TIMING_RUNS", "paper_ratios"]
 
 #: Name of the PNG :func:`make` writes.
 FILENAME = "table1_timings.png"
@@ -84,8 +85,6 @@ COLUMNS = ("G-buffer", "lines 5", "lines 9", "points 12", "points 33", "HSAO", "
            "points 12 nearest", "points 33 nearest", "area 1")
 #: The configuration every ratio is relative to.
 BASELINE = "points 12"
-#: Image size of this library's rows (full, quick).
-SIZE = {False: PAPER_RESOLUTION, True: (48, 48)}
 #: Timed runs per configuration after a warm-up, (full, quick); the median is reported.
 TIMING_RUNS = {False: 3, True: 1}
 #: Range of each numeric CSV column (the tests check every row against it).
@@ -94,11 +93,10 @@ CSV_RANGES = {"ms": (0.0, 1e7), "ratio": (0.0, 1e5), "baseline_ms": (0.0, 1e7),
 
 _SCENES = ("cornell_box", "blob")
 _DUAL_SCENE = "cornell_box"
-_RADIUS_FRACTION = 0.1
-_ESTIMATORS = {"lines 5": ("line", 5, None), "lines 9": ("line", 9, None),
-               "points 12": ("point", 12, None), "points 33": ("point", 33, None),
-               "points 12 nearest": ("point", 12, "nearest"),
-               "points 33 nearest": ("point", 33, "nearest"), "area 1": ("area", 1, None)}
+#: Column -> configuration of :mod:`vobscure.methods` (method, samples, fetch).
+_ESTIMATORS = {"lines 5": ("line", 5), "lines 9": ("line", 9), "points 12": ("point", 12),
+               "points 33": ("point", 33), "points 12 nearest": ("point", 12, "nearest"),
+               "points 33 nearest": ("point", 33, "nearest"), "area 1": ("area", 1)}
 _DUAL = ("lines 5", "lines 9", "points 12", "points 33")
 _CSV_COLUMNS = ("source", "row", "column", "width", "height", "ms", "baseline_ms", "ratio")
 
@@ -157,10 +155,11 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, normal_clamp
     >>> table1_timings.FILENAME
     'table1_timings.png'
     """
-    from ._common import new_figure, save_figure, write_csv
+    from ..common import new_figure
+    from ._common import size_for, write_figure
 
     quick = bool(quick)
-    size = tuple(size) if size is not None else SIZE[quick]
+    size = size_for(quick, size, full=PAPER_RESOLUTION)
     runs = TIMING_RUNS[quick] if runs is None else int(runs)
     ours = _measure(size, seed, bool(normal_clamp), runs)
     rows = _csv_rows(ours, size)
@@ -173,11 +172,7 @@ def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, normal_clamp
     fig.suptitle(f"Loos & Sloan 2010, Table 1: time per pass as a ratio to points 12 of the same row "
                  f"(paper: QuadroFX 4800, 1024 x 1024; vobscure: NumPy on this CPU, {w} x {h}"
                  f"{', quick' if quick else ''})", fontsize=13)
-
-    out_dir = Path(out_dir)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows, _CSV_COLUMNS)
-    return [png, csv]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _CSV_COLUMNS)
 
 
 # ----------------------------------------------------------------------------- data
@@ -193,36 +188,35 @@ def _paper_baseline(row) -> float:
 
 def _measure(size, seed, normal_clamp, runs) -> dict:
     """``{row: {column: seconds}}`` for this library's rows."""
-    import vobscure as vo
-
-    from ._common import median_seconds
+    from ... import methods, scenes
+    from ...gbuffer import render_gbuffer
+    from ...screenspace import bilateral_blur, combine_radii, vo_line
+    from ..common import default_radius, time_calls
     from .fig8_dual_radii import RADII
 
+    configs = {label: methods.Config(*spec) for label, spec in _ESTIMATORS.items()}
+
     def estimator(gb, label, radius):
-        method, n, fetch = _ESTIMATORS[label]
-        f = {"line": vo.vo_line, "point": vo.vo_point, "area": vo.vo_area}[method]
-        kwargs = {"radius": radius, "samples": n, "normal_clamp": normal_clamp, "seed": seed}
-        if fetch is not None:
-            kwargs["fetch"] = fetch
-        return lambda: f(gb, **kwargs)
+        return lambda: configs[label].run(gb, radius=radius, normal_clamp=normal_clamp, seed=seed)
 
     out = {}
     for name in _SCENES:
-        scene = vo.scenes.get(name)
+        scene = scenes.get(name)
         cam = scene.camera(size)
-        gb = vo.render_gbuffer(scene, cam)
-        radius = _RADIUS_FRACTION * scene.extent
-        visibility = vo.vo_line(gb, radius=radius, samples=9, normal_clamp=normal_clamp, seed=seed)
-        jobs = {"G-buffer": lambda scene=scene, cam=cam: vo.render_gbuffer(scene, cam),
-                "blur": lambda gb=gb, v=visibility: vo.bilateral_blur(v, gb)}
+        gb = render_gbuffer(scene, cam)
+        radius = default_radius(scene)
+        visibility = vo_line(gb, radius=radius, samples=9, normal_clamp=normal_clamp, seed=seed)
+        jobs = {"G-buffer": lambda scene=scene, cam=cam: render_gbuffer(scene, cam),
+                "blur": lambda gb=gb, v=visibility: bilateral_blur(v, gb)}
         jobs.update({label: estimator(gb, label, radius) for label in _ESTIMATORS})
         if name == _DUAL_SCENE:
             radii = [f * scene.extent for f in RADII]
             for label in _DUAL:
                 small, large = (estimator(gb, label, r) for r in radii)
                 jobs[("dual", label)] = (lambda s=small, g=large:
-                                         vo.combine_radii(s(), g(), mode="product"))
-        seconds = median_seconds(jobs, runs)
+                                         combine_radii(s(), g(), mode="product"))
+        timings, _ = time_calls(jobs, runs)
+        seconds = {k: t.median for k, t in timings.items()}
         out[name] = {k: v for k, v in seconds.items() if not isinstance(k, tuple)}
         if name == _DUAL_SCENE:
             out[f"{name} (dual radii)"] = {k[1]: v for k, v in seconds.items() if isinstance(k, tuple)}

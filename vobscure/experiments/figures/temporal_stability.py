@@ -77,10 +77,11 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path
     >>> FILENAME
     'temporal_stability.png'
     """
-    from . import _common
+    from ..common import new_figure
+    from ._common import write_figure
 
     rows = measure(quick, seed=seed) if rows is None else rows
-    fig = _common.new_figure(12, 3.9 * len(SCENES))
+    fig = new_figure(12, 3.9 * len(SCENES))
     axes = fig.subplots(len(SCENES), 2, squeeze=False)
     for i, scene in enumerate(SCENES):
         sel = [r for r in rows if r["scene"] == scene]
@@ -97,9 +98,7 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path
         axes[i, 1].set_ylabel("RMSE vs screen-space VO")
         axes[i, 1].set_title(f"{scene}: error of one frame")
     fig.suptitle("Temporal stability over a 10-degree camera orbit (Loos & Sloan 2010, Sec. 5.1)")
-    out = Path(out_dir)
-    return [_common.save_figure(fig, out / FILENAME),
-            _common.write_csv(out / CSV_FILENAME, rows, _COLUMNS)]
+    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
 
 
 def markdown(rows) -> str:
