@@ -18,7 +18,7 @@ from vobscure.experiments import sweep as S
 from vobscure.experiments.cache import ReferenceCache
 from vobscure.experiments.sweep import SweepConfig, SweepResult, results_to_csv, results_to_markdown, sweep
 
-SMALL = dict(size=(32, 32), radius=0.5, rays=16, reference_samples=128)
+SMALL = dict(size=(32, 32), radius=0.5, rays=16, volume_samples=16, screen_samples=128)
 ALL_REFS = ("screen", "volumetric", "ao")
 SIDE_CAMERA = vo.Camera.look_at((3.0, 1.5, 2.0), (0.5, 0.3, 0.0), size=(24, 20), fov_y=50.0)
 
@@ -32,7 +32,7 @@ def _configs():
         SweepConfig("slab", "line", 5, references=("ao",), normal_clamp=True, **SMALL),
         SweepConfig("crease", "area", 1, references=("screen", "obscurance"), thickness=0.25, **SMALL),
         SweepConfig("crease", "reference", 32, references=("screen",), camera=SIDE_CAMERA,
-                    radius=0.5, rays=16, reference_samples=128),
+                    radius=0.5, rays=16, volume_samples=16, screen_samples=128),
     ]
 
 
@@ -193,7 +193,7 @@ def test_config_validation_and_pickling():
     for kwargs, name in [(dict(method="lines"), "method"), (dict(samples=0), "samples"),
                          (dict(references=("screen", "gtao")), "references"),
                          (dict(references=("ao", "ao")), "references"), (dict(radius=-1.0), "radius"),
-                         (dict(seed=-1), "seed"), (dict(repeats=0), "repeats"), (dict(rays=1), "rays"),
+                         (dict(seed=-1), "seed"), (dict(repeats=-1), "repeats"), (dict(rays=1), "rays"),
                          (dict(falloff="linear"), "falloff"), (dict(scene="nowhere"), "scene"),
                          (dict(camera=(0, 0, 1)), "camera"), (dict(size=(0, 4)), "size"),
                          (dict(normal_clamp=1), "normal_clamp"), (dict(thickness=0.0), "thickness")]:
@@ -242,7 +242,9 @@ def test_writers_are_atomic(tmp_path, threaded, monkeypatch):
             raise KeyboardInterrupt
         return real(target, partial)
 
-    monkeypatch.setattr(S, "atomic_write", interrupted)
+    from vobscure.experiments import common
+
+    monkeypatch.setattr(common, "atomic_write", interrupted)      # the one writer of experiments
     with pytest.raises(KeyboardInterrupt):
         results_to_csv(threaded[:1], path)
     with pytest.raises(KeyboardInterrupt):
@@ -273,7 +275,7 @@ def test_the_package_attribute_is_the_sweep_function():
     from vobscure.experiments.sweep import SweepConfig, sweep
 
     configs = [SweepConfig("slab", "line", 5, size=(8, 8), radius=0.5, references=("screen",),
-                           reference_samples=32)]
+                           screen_samples=32)]
     with ThreadPoolExecutor(1) as pool:
         a = vo.experiments.sweep(configs, executor=pool, progress=False)
         b = sweep(configs, executor=pool, progress=False)

@@ -14,9 +14,19 @@ from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric
 from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flicker
 from .raytrace import Tracer
 from .scenes import Scene
-from .screenspace import bilateral_blur, combine_radii, vo_line, vo_point, vo_reference
-from .screenspace import vo_area
-from . import experiments, patterns
+from .screenspace import bilateral_blur, combine_radii, vo_area, vo_line, vo_point, vo_reference
+from . import methods, patterns
+
+
+def __getattr__(name):
+    # vobscure.experiments (comparisons, sweeps, figures) sits above the core and is imported
+    # on first use: no core module depends on it, and `import vobscure` stays light.
+    if name == "experiments":
+        import importlib
+
+        return importlib.import_module(f"{__name__}.experiments")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 try:
     __version__ = _version("vobscure")
@@ -40,6 +50,7 @@ __all__ = [
     "error",
     "experiments",
     "flicker",
+    "methods",
     "ground_truth",
     "obscurance",
     "render_gbuffer",

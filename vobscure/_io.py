@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["atomic_write", "save_npz", "save_png"]
+__all__ = ["atomic_write", "save_npz"]
 
 
 def atomic_write(path, write) -> Path:
@@ -43,18 +43,6 @@ def save_npz(path, provenance: dict, **arrays) -> Path:
     """Compressed ``.npz`` of ``arrays`` plus a JSON ``provenance`` record, written atomically."""
     record = json.dumps(provenance, sort_keys=True, default=_jsonable)
     return atomic_write(path, lambda fh: np.savez_compressed(fh, provenance=np.array(record), **arrays))
-
-
-def save_png(path, image: np.ndarray) -> Path:
-    """Write a float image in [0, 1] ((H, W), (H, W, 3) or (H, W, 4)) as PNG, atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.image as mpimg
-
-    img = np.clip(np.nan_to_num(np.asarray(image, dtype=np.float64), nan=0.0), 0.0, 1.0)
-    kwargs = {"cmap": "gray", "vmin": 0.0, "vmax": 1.0} if img.ndim == 2 else {}
-    return atomic_write(path, lambda fh: mpimg.imsave(fh, img, format="png", **kwargs))
 
 
 def _jsonable(value):

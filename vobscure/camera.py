@@ -34,7 +34,7 @@ import numpy as np
 
 from ._validate import as_array, check_choice, check_positive
 
-__all__ = ["Camera"]
+__all__ = ["Camera", "check_size"]
 
 #: Default vertical field of view in degrees when neither ``fov_y`` nor ``ortho_height`` is given.
 DEFAULT_FOV_Y = 45.0
@@ -53,7 +53,15 @@ def _vector3(value, name: str) -> np.ndarray:
     return arr
 
 
-def _check_size(size) -> tuple[int, int]:
+def check_size(size) -> tuple[int, int]:
+    """An image size as a pair ``(width, height)`` of positive ints, or a ValueError naming
+    ``size``.
+
+    Examples
+    --------
+    >>> check_size([640, 480])
+    (640, 480)
+    """
     if isinstance(size, (str, bytes)) or not hasattr(size, "__len__"):
         raise ValueError(f"size must be a pair (width, height) of positive ints, got {size!r}")
     if isinstance(size, np.ndarray) and size.ndim != 1:
@@ -161,7 +169,7 @@ class Camera:
         eye = _vector3(eye, "eye")
         target = _vector3(target, "target")
         up_hint = _vector3(up, "up")
-        size = _check_size(size)
+        size = check_size(size)
         if fov_y is not None and ortho_height is not None:
             raise ValueError("give fov_y (perspective) or ortho_height (orthographic), not both; "
                              f"got fov_y={fov_y!r} and ortho_height={ortho_height!r}")

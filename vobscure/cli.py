@@ -22,8 +22,6 @@ __all__ = ["main", "render"]
 
 DEFAULT_SCENE = "cornell_box"
 DEFAULT_SIZE = (256, 256)
-#: default radius as a fraction of the scene's extent (bounding-box diagonal)
-DEFAULT_RADIUS_FRACTION = 0.1
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -38,8 +36,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quantity", choices=("ao", "obscurance", "volumetric"), default="ao",
                    help="what to compute (default ao)")
     r.add_argument("--radius", type=float, default=None,
-                   help=f"AO ray length / obscurance distance / VO ball radius "
-                        f"(default {DEFAULT_RADIUS_FRACTION} x the scene extent)")
+                   help="AO ray length / obscurance distance / VO ball radius (default 0.1 x the scene extent)")
     r.add_argument("--rays", type=int, default=256, help="rays per pixel for ao/obscurance (default 256)")
     r.add_argument("--samples", type=int, default=1024, help="points per ball for volumetric (default 1024)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -50,10 +47,17 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
 
-    c = sub.add_parser("compare", help="error, time and taps per pixel of the screen-space estimators",
+    from . import methods
+
+    c = sub.add_parser("compare", help="which estimator, with how many samples, at what cost and accuracy",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="Measure the screen-space estimators on one scene against the requested "
-                                   "references; write results.csv, results.md, tradeoff.png, gallery.png "
-                                   "and provenance.json.")
+                                   "references, print the verdict (Pareto fronts, the cheapest configuration "
+                                   "meeting a target RMSE, the dominant error term and what reduces it) and "
+                                   "write results.csv, results.md, summary.json, tradeoff.png, gallery.png "
+                                   "and provenance.json.",
+                       epilog="methods (--methods NAME[:SAMPLES[:FETCH]], from vobscure.methods):\n  "
+                              + methods.describe().replace("\n", "\n  "))
     c.add_argument("--scene", default=DEFAULT_SCENE, help=f"built-in scene or mesh file (default {DEFAULT_SCENE})")
     c.add_argument("--camera", default=None, metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
                    help="eye and target (and vertical field of view in degrees); default the scene's camera")
@@ -62,19 +66,27 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--radius", type=float, nargs="+", default=None,
                    help="one or more ball radii (default 0.1 x the scene extent)")
     c.add_argument("--methods", default=None,
-                   help="comma-separated NAME:SAMPLES, NAME in point, line, area "
-                        "(default point:12,point:33,line:5,line:9,area:1)")
+                   help="comma-separated NAME[:SAMPLES[:FETCH]] with NAME one of "
+                        f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1)")
     c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
     c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")
     c.add_argument("--reference", nargs="+", default=None, choices=("screen", "volumetric", "ao", "obscurance"),
                    help="references to compute (default screen volumetric ao)")
     c.add_argument("--repeats", type=int, default=3, help="timed runs per configuration, median kept (default 3)")
     c.add_argument("--rays", type=int, default=256, help="rays per pixel of ao/obscurance (default 256)")
-    c.add_argument("--samples", type=int, default=1024, help="ball samples of the world-space VO (default 1024)")
+    c.add_argument("--volume-samples", "--samples", dest="volume_samples", type=int, default=1024,
+                   help="points per ball of the world-space VO (default 1024)")
     c.add_argument("--screen-samples", type=int, default=2048,
                    help="samples of the converged screen-space VO (default 2048)")
     c.add_argument("--orbit", type=int, default=0, metavar="N", help="N-frame camera orbit: temporal flicker")
     c.add_argument("--seed", type=int, default=0)
+    c.add_argument("--target-rmse", type=float, default=None, metavar="X",
+                   help="the accuracy to meet against each method's own reference "
+                        "(default 1.5 x the best configuration's RMSE)")
+    c.add_argument("--budget-ms", type=float, default=None, metavar="T",
+                   help="a time budget per frame: name the most accurate configuration within it")
+    c.add_argument("--no-suggest", dest="suggest", action="store_false",
+                   help="do not try the thickness model when the screen-space error dominates")
     c.add_argument("--quick", action="store_true", help="small and fast (under two minutes)")
     c.add_argument("--out", type=Path, default=None, help="output folder (default ./vobscure-out/compare-<scene>)")
     c.add_argument("--cache", type=Path, default=None, help="reference cache folder (default: user cache)")
@@ -105,7 +117,8 @@ def _camera_arg(spec: str, size):
 
 
 def _compare_main(args) -> int:
-    from .experiments.compare import DEFAULT_METHODS, DEFAULT_REFERENCES, DEFAULT_SIZE, QUICK_SIZE, compare
+    from .experiments.compare import (DEFAULT_METHODS, DEFAULT_REFERENCES, DEFAULT_SIZE, QUICK_SIZE, compare,
+                                      report_text)
 
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else DEFAULT_SIZE)
     camera = _camera_arg(args.camera, size) if args.camera else None
@@ -113,81 +126,56 @@ def _compare_main(args) -> int:
     result = compare(args.scene, camera=camera, size=size, radii=args.radius,
                      methods=args.methods or DEFAULT_METHODS, normal_clamp=args.normals,
                      thickness=args.thickness, references=tuple(args.reference or DEFAULT_REFERENCES),
-                     repeats=args.repeats, rays=args.rays, samples=args.samples,
-                     screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit, quick=args.quick,
-                     out=args.out, cache=cache, progress=not args.quiet)
+                     repeats=args.repeats, rays=args.rays, volume_samples=args.volume_samples,
+                     screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit,
+                     target_rmse=args.target_rmse, budget_ms=args.budget_ms, suggest=args.suggest,
+                     quick=args.quick, out=args.out, cache=cache, progress=not args.quiet)
     if not args.quiet:
-        primary = result.provenance["primary_reference"]
-        print(f"{result.provenance['scene']}: {len(result.rows)} configurations, "
-              f"{result.provenance['seconds']:.1f} s; RMSE against {primary}:")
-        for row in result.rows:
-            extra = f", flicker {row['flicker']:+.4f}" if "flicker" in row else ""
-            print(f"  {row['method']:>5s}:{row['samples']:<3d} R={row['radius']:.3g}  "
-                  f"{row['seconds'] * 1e3:8.1f} ms  {row['taps_per_pixel']:3d} taps/px  "
-                  f"RMSE {row[primary + '_rmse']:.4f}{extra}")
-        for path in result.files.values():
-            print(f"  wrote {path}")
+        print(report_text(result))
     return 0
 
 
 def _figures_main(args) -> int:
     from .experiments import figures
 
-    registry = getattr(figures, "FIGURES", {name: name for name in figures.__all__})
     if args.list:
-        for name in registry:
+        for name in figures.FIGURES:
             print(name)
         return 0
     names = None if args.names in ([], ["all"]) else args.names
-    unknown = [n for n in (names or []) if n not in registry]
+    unknown = [n for n in (names or []) if n not in figures.FIGURES]
     if unknown:
-        raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of {', '.join(registry)}")
-    if hasattr(figures, "make_all"):
-        paths = figures.make_all(args.out, quick=args.quick, names=names)
-    else:  # pragma: no cover - the registry always has make_all
-        import importlib
-
-        paths = []
-        for name in names or list(registry):
-            mod = importlib.import_module(f"vobscure.experiments.figures.{registry[name]}")
-            paths += mod.make(args.out, quick=args.quick)
+        raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of "
+                         f"{', '.join(figures.FIGURES)}")
+    paths = figures.make_all(args.out, quick=args.quick, names=names)
     for path in paths:
         print(f"wrote {path}")
     return 0
-
-
-def _load_scene(spec: str):
-    from . import scenes
-
-    if spec in scenes.names():
-        return scenes.get(spec), spec
-    path = Path(spec)
-    if path.suffix or path.exists():
-        return scenes.load(path), str(path)
-    raise ValueError(f"--scene {spec!r} is neither a built-in scene ({', '.join(scenes.names())}) "
-                     f"nor a mesh file")
 
 
 def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao", radius=None,
            rays: int = 256, samples: int = 1024, seed: int = 0, threads=None,
            out=Path("vobscure-out"), progress: bool = True, allow_open: bool = False) -> dict:
     """Run the render job; returns the provenance record (also stored in the ``.npz``)."""
-    import vobscure as vo
-
-    from ._io import save_npz, save_png
+    from . import __version__
+    from ._io import save_npz
+    from .experiments.common import default_radius
+    from .gbuffer import render_gbuffer
+    from .groundtruth import ground_truth
+    from .scenes import resolve
 
     t0 = time.perf_counter()
-    sc, scene_spec = _load_scene(scene)
+    sc, scene_spec = resolve(scene)
     cam = sc.camera(tuple(size))
     if radius is None:
-        radius = DEFAULT_RADIUS_FRACTION * sc.extent
-    gb = vo.render_gbuffer(sc, cam)
-    ref = vo.ground_truth(sc, gb, quantity=quantity, radius=radius, rays=rays, samples=samples,
+        radius = default_radius(sc)
+    gb = render_gbuffer(sc, cam)
+    ref = ground_truth(sc, gb, quantity=quantity, radius=radius, rays=rays, samples=samples,
                           seed=seed, progress=progress, threads=threads, allow_open=allow_open)
     seconds = time.perf_counter() - t0
     out = Path(out)
     provenance = {
-        "tool": "vobscure render", "version": vo.__version__, "scene": scene_spec,
+        "tool": "vobscure render", "version": __version__, "scene": scene_spec,
         "scene_extent": sc.extent, "triangles": int(len(sc.triangles)), "camera": cam.to_dict(),
         "quantity": quantity, "radius": float(radius), "rays": int(rays), "samples": int(samples),
         "samples_per_pixel": int(ref.samples), "seed": int(seed), "seconds": round(seconds, 3),
@@ -197,11 +185,25 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     save_npz(out / f"{stem}.npz", provenance, depth=gb.depth, normal=gb.normal, valid=gb.valid,
              world_position=gb.world_position, world_normal=gb.world_normal,
              visibility=ref.value, stderr=ref.stderr)
-    save_png(out / f"{stem}_depth.png", _depth_image(gb.depth, gb.valid))
-    save_png(out / f"{stem}_normal.png", _normal_image(gb.normal, gb.valid))
-    save_png(out / f"{stem}_visibility.png", _visibility_image(ref.value, gb.valid))
+    _save_png(out / f"{stem}_depth.png", _depth_image(gb.depth, gb.valid))
+    _save_png(out / f"{stem}_normal.png", _normal_image(gb.normal, gb.valid))
+    _save_png(out / f"{stem}_visibility.png", _visibility_image(ref.value, gb.valid))
     provenance["files"] = [f"{stem}{s}" for s in (".npz", "_depth.png", "_normal.png", "_visibility.png")]
     return provenance
+
+
+def _save_png(path, image: np.ndarray) -> Path:
+    """Write a float image in [0, 1] ((H, W), (H, W, 3) or (H, W, 4)) as PNG, atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.image as mpimg
+
+    img = np.clip(np.nan_to_num(np.asarray(image, dtype=np.float64), nan=0.0), 0.0, 1.0)
+    kwargs = {"cmap": "gray", "vmin": 0.0, "vmax": 1.0} if img.ndim == 2 else {}
+    from ._io import atomic_write
+
+    return atomic_write(path, lambda fh: mpimg.imsave(fh, img, format="png", **kwargs))
 
 
 def _depth_image(depth, valid):

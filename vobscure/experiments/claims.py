@@ -24,41 +24,40 @@ Three experiments, each measured against two references:
     ``vo_line`` with 9 samples clamped to the half-ball or not, each against its own ground
     truth, and how closely each follows ray-cast ambient occlusion.
 
-Run ``python -m vobscure.experiments.claims`` (add ``--quick`` for a smoke run in seconds,
-``--figure DIR`` to also draw :mod:`vobscure.experiments.figures.screenspace_claims` from the
-same measurements); it prints markdown tables. The numbers and verdicts are in
-``docs/results.md``.
+The measurements are one :func:`~vobscure.experiments.sweep.sweep` (:func:`sweep_configs`),
+run in this process so that timings do not share the machine; costs (taps and texels per
+pixel) come from the method registry :mod:`vobscure.methods`.
 
-Time here is NumPy on a CPU, not GPU milliseconds: see :data:`TEXELS_PER_TAP` and
-``docs/results.md`` for what "less time" means on this machine and what the machine-independent
-cost (depth taps per pixel) says.
+Run ``python -m vobscure.experiments.claims`` (add ``--quick`` for a smoke run in seconds); it
+prints markdown tables. ``vobscure figures screenspace_claims`` draws the same measurements.
+The numbers and verdicts are in ``docs/results.md``.
+
+Time here is NumPy on a CPU, not GPU milliseconds: see ``docs/results.md`` for what "less
+time" means on this machine and what the machine-independent cost (depth taps per pixel)
+says.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import sys
-import time
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 from scipy import ndimage
 
+from .. import methods as _methods
+from .common import machine
+
 __all__ = ["Config", "Measurement", "measurement", "CONFIGS", "SUPPLEMENTARY", "CLAIMS", "SCENES",
-           "THICKNESS_FACTORS", "THICKNESS_HEADLINE", "line_vs_point", "claims",
+           "THICKNESS_FACTORS", "THICKNESS_HEADLINE", "line_vs_point", "claims", "sweep_configs",
            "thickness_at_silhouettes", "normals_on_off", "silhouette_mask", "machine", "markdown",
            "main"]
 
-#: The scenes of the CLI run (``vo.scenes.get`` names).
+#: The scenes of the CLI run (``vobscure.scenes.get`` names).
 SCENES = ("cornell_box", "blob")
-#: Ball radius as a fraction of the scene's extent (bounding-box diagonal) when none is given.
-RADIUS_FRACTION = 0.1
-#: Timed runs per configuration; the median is reported. Runs go round-robin over the
-#: configurations (after one untimed warm-up call each), so that a slow spell of the machine
-#: falls on every configuration alike.
+#: Timed runs per configuration (after one untimed warm-up call); the median is reported.
 TIMING_RUNS = 3
 #: Extra seeds (seed + 1, ...) at which the error against the reference is measured again, to
 #: tell a real difference between configurations from the luck of one noise texture.
@@ -69,6 +68,8 @@ REFERENCE_SAMPLES = {False: 4096, True: 1024}
 #: measured against (its limit differs from the reference under perspective; see
 #: ``docs/results.md``).
 LIMIT_LINES = 128
+#: Seed offset of that converged line estimate (its noise independent of the measured one's).
+LIMIT_SEED_OFFSET = 1000
 #: Image size of quick runs (the CLI's ``--quick``, the figure's ``quick=True``).
 QUICK_SIZE = (48, 48)
 #: Relative depth jump to a 4-neighbour that marks a depth discontinuity (Fig. 5).
@@ -78,45 +79,34 @@ THICKNESS_FACTORS = (0.25, 0.5, 1.0, 2.0)
 #: The headline thickness of the Fig. 5 comparison, a fraction of the radius (see
 #: :func:`thickness_at_silhouettes` for the reason).
 THICKNESS_HEADLINE = 0.5
-#: Depth-buffer texels read per tap: a nearest fetch reads one, a bilinear fetch four; the
-#: area estimator's mip-map lookup reads two levels of 2 x 2 (trilinear) or 3 x 3 (its
-#: default quadratic B-spline) texels, each of three channels.
-TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18}
 
 
 @dataclass(frozen=True)
 class Config:
-    """One estimator configuration: a label, the method, its sample count and fetch.
+    """One configuration of the claims: a label of the paper's wording ("lines 5") and the
+    method registry's configuration it runs (:class:`vobscure.methods.Config`).
 
-    ``fetch=None`` keeps the estimator's default (``nearest`` for lines, ``bilinear`` for
+    ``fetch=None`` keeps the method's default (``nearest`` for lines, ``bilinear`` for
     points). ``primary`` marks the four configurations of Table 1.
     """
 
     label: str
-    method: str            # "line", "point" or "area"
+    method: str
     samples: int
     fetch: str | None = None
     primary: bool = True
 
     @property
+    def method_config(self) -> _methods.Config:
+        return _methods.Config(self.method, self.samples, fetch=self.fetch)
+
+    @property
     def fetch_used(self) -> str:
-        if self.method == "area":
-            return "bspline"   # vo_area's default reconstruction
-        if self.fetch is not None:
-            return self.fetch
-        return "nearest" if self.method == "line" else "bilinear"
-
-    def estimator(self):
-        import vobscure as vo
-
-        return {"line": vo.vo_line, "point": vo.vo_point, "area": getattr(vo, "vo_area", None)}[self.method]
+        return self.method_config.fetch_used
 
     def run(self, gb, *, radius, normal_clamp, seed, thickness=None):
-        kwargs = {"radius": radius, "samples": self.samples, "normal_clamp": normal_clamp,
-                  "thickness": thickness, "seed": seed}
-        if self.fetch is not None:
-            kwargs["fetch"] = self.fetch
-        return self.estimator()(gb, **kwargs)
+        return self.method_config.run(gb, radius=radius, normal_clamp=normal_clamp, thickness=thickness,
+                                      seed=seed)
 
 
 #: Table 1's four configurations (estimator defaults: randomize=True, normal_clamp=False).
@@ -128,7 +118,7 @@ CONFIGS = (
 )
 #: Not in Table 1: point sampling with the one-texel fetch the line estimator uses, which
 #: separates the cost of the sampling scheme from the cost of vo_point's default bilinear
-#: fetch; and one area sample (Fig. 1's "1 area sample") when ``vo.vo_area`` is exported.
+#: fetch; and one area sample (Fig. 1's "1 area sample").
 SUPPLEMENTARY = (
     Config("points 12 nearest", "point", 12, fetch="nearest", primary=False),
     Config("points 33 nearest", "point", 33, fetch="nearest", primary=False),
@@ -139,10 +129,7 @@ CLAIMS = (("lines 5", "points 12"), ("lines 9", "points 33"))
 
 
 def _configs(supplementary: bool) -> tuple[Config, ...]:
-    import vobscure as vo
-
-    extra = tuple(c for c in SUPPLEMENTARY if c.method != "area" or hasattr(vo, "vo_area"))
-    return CONFIGS + (extra if supplementary else ())
+    return CONFIGS + (SUPPLEMENTARY if supplementary else ())
 
 
 # ----------------------------------------------------------------------------- masks
@@ -226,99 +213,95 @@ def _corr(a, b) -> float:
     return float(np.corrcoef(a[use], b[use])[0, 1])
 
 
-def _time(configs, gb, *, radius, normal_clamp, seed, runs):
-    """Wall and CPU seconds per configuration, round-robin over ``runs`` rounds after a warm-up."""
-    images = {}
-    for c in configs:   # warm-up: patterns are generated and cached on the first call
-        images[c.label] = c.run(gb, radius=radius, normal_clamp=normal_clamp, seed=seed)
-    seconds = {c.label: [] for c in configs}
-    cpu = {c.label: [] for c in configs}
-    for _ in range(runs):
-        for c in configs:
-            t0, c0 = time.perf_counter(), time.process_time()
-            c.run(gb, radius=radius, normal_clamp=normal_clamp, seed=seed)
-            seconds[c.label].append(time.perf_counter() - t0)
-            cpu[c.label].append(time.process_time() - c0)
-    return images, seconds, cpu
+def sweep_configs(scene_name: str, *, size=(256, 256), radius=None, seed=0, rays=256, quick=False,
+                  supplementary=True) -> list:
+    """The sweep behind :func:`line_vs_point`, as :class:`~vobscure.experiments.sweep.SweepConfig`
+    objects: for each ``normal_clamp`` and configuration, the timed run against the three
+    references (screen-space VO, world-space VO, AO), :data:`SEED_REPEATS` untimed runs at
+    further seeds against the screen-space VO, and for each line fetch the converged
+    :data:`LIMIT_LINES`-line estimate.
 
-
-def _limit(c: Config, gb, *, radius, normal_clamp, seed, reference, cache):
-    """The configuration's own converged value: what it tends to with many samples.
-
-    Lines: ``vo_line`` with :data:`LIMIT_LINES` lines (same fetch). Points with the default
-    bilinear fetch: the reference itself (the same occupancy test, densely sampled). Others
-    (points with a nearest fetch, area): None, not measured.
+    Examples
+    --------
+    >>> cs = sweep_configs("blob", size=(16, 16), quick=True, supplementary=False)
+    >>> len(cs), cs[0].label, cs[0].references, cs[0].repeats
+    (50, 'line:5', ('screen', 'volumetric', 'ao'), 3)
     """
-    import vobscure as vo
+    from .sweep import SweepConfig
 
-    if c.method == "line":
-        key = ("line", c.fetch_used)
-        if key not in cache:
-            cache[key] = vo.vo_line(gb, radius=radius, samples=LIMIT_LINES, normal_clamp=normal_clamp,
-                                    seed=seed + 1000, fetch=c.fetch_used)
-        return cache[key]
-    if c.method == "point" and c.fetch_used == "bilinear":
-        return reference
-    return None
+    base = dict(scene=scene_name, size=tuple(size), radius=radius, rays=rays,
+                volume_samples=rays if quick else 4 * rays, screen_samples=REFERENCE_SAMPLES[bool(quick)],
+                reference_seed=seed)
+    out = []
+    for normal_clamp in (False, True):
+        for c in _configs(supplementary):
+            kw = dict(base, method=c.method, samples=c.samples, fetch=c.fetch, normal_clamp=normal_clamp)
+            out.append(SweepConfig(seed=seed, repeats=TIMING_RUNS, references=("screen", "volumetric", "ao"), **kw))
+            out += [SweepConfig(seed=seed + k, repeats=0, references=("screen",), **kw)
+                    for k in range(1, SEED_REPEATS + 1)]
+        for fetch in dict.fromkeys(c.fetch for c in _configs(supplementary) if c.method == "line"):
+            out.append(SweepConfig(method="line", samples=LIMIT_LINES, fetch=fetch, normal_clamp=normal_clamp,
+                                   seed=seed + LIMIT_SEED_OFFSET, repeats=0, references=("screen",), **base))
+    return out
 
 
 @lru_cache(maxsize=4)
 def _measure(scene_name: str, size: tuple, radius, seed: int, rays: int, quick: bool,
              supplementary: bool) -> Measurement:
-    import vobscure as vo
+    from ..metrics import error
+    from ..scenes import resolve
+    from ..screenspace import bilateral_blur
+    from .sweep import InlineExecutor, sweep
 
-    scene = vo.scenes.get(scene_name)
-    gb = vo.render_gbuffer(scene, scene.camera(size))
-    r = RADIUS_FRACTION * scene.extent if radius is None else float(radius)
+    configs = sweep_configs(scene_name, size=size, radius=radius, seed=seed, rays=rays, quick=quick,
+                            supplementary=supplementary)
+    results = sweep(configs, executor=InlineExecutor(), keep_images=True, progress=False)
+    by_key = {(r.config.label, r.config.normal_clamp, r.config.seed): r for r in results}
+    first = results[0]
+    gb, r = first.gbuffer, first.radius
     ref_samples = REFERENCE_SAMPLES[quick]
-    gt_samples = rays if quick else 4 * rays
-    configs = _configs(supplementary)
-    ao = vo.ground_truth(scene, gb, quantity="ao", radius=r, rays=rays, seed=seed, progress=False)
     rows, images, reference, truth = [], {}, {}, {}
+    ao = first.references["ao"]
     for normal_clamp in (False, True):
-        ref = vo.vo_reference(gb, radius=r, samples=ref_samples, normal_clamp=normal_clamp, seed=seed).value
-        gt = vo.ground_truth(scene, gb, quantity="volumetric", radius=r, samples=gt_samples,
-                             normal_clamp=normal_clamp, seed=seed, progress=False)
-        reference[normal_clamp], truth[normal_clamp] = ref, gt
-        est, seconds, cpu = _time(configs, gb, radius=r, normal_clamp=normal_clamp, seed=seed,
-                                  runs=TIMING_RUNS)
-        limits = {}
-        for c in configs:
-            v = est[c.label]
-            limit = _limit(c, gb, radius=r, normal_clamp=normal_clamp, seed=seed, reference=ref,
-                           cache=limits)
-            nan = float("nan")
-            e_lim = vo.error(v, limit).rmse if limit is not None else nan
-            lim_ref = vo.error(limit, ref).rmse if limit is not None and limit is not ref else (
-                0.0 if limit is ref else nan)
+        for c in _configs(supplementary):
+            res = by_key[(c.method_config.label, normal_clamp, seed)]
+            ref, gt = res.references["screen"].value, res.references["volumetric"]
+            reference[normal_clamp], truth[normal_clamp] = ref, gt
+            v = res.image
             images[(c.label, normal_clamp)] = v
-            e_ref = vo.error(v, ref)
-            e_gt = vo.error(v, gt.value)
-            blurred = vo.bilateral_blur(v, gb)
-            repeats = [vo.error(c.run(gb, radius=r, normal_clamp=normal_clamp, seed=seed + k), ref).rmse
-                       for k in range(1, SEED_REPEATS + 1)]
-            taps = vo.screenspace.point_taps(c.samples) if c.method == "point" else c.samples
+            if c.method == "line":
+                limit_res = by_key[(_methods.Config("line", LIMIT_LINES, fetch=c.fetch).label, normal_clamp,
+                                    seed + LIMIT_SEED_OFFSET)]
+                rmse_limit, lim_ref = error(v, limit_res.image).rmse, limit_res.errors["screen"].rmse
+            elif c.method == "point" and c.fetch_used == "bilinear":
+                # the reference is the same occupancy test densely sampled: the points' own limit
+                rmse_limit, lim_ref = res.errors["screen"].rmse, 0.0
+            else:
+                rmse_limit = lim_ref = float("nan")
+            seeds = [by_key[(res.config.label, normal_clamp, seed + k)].errors["screen"].rmse
+                     for k in range(1, SEED_REPEATS + 1)]
+            e_ref, e_gt = res.errors["screen"], res.errors["volumetric"]
             rows.append({
                 "scene": scene_name, "size": tuple(size), "radius": r, "config": c.label,
                 "method": c.method, "samples": c.samples, "fetch": c.fetch_used, "primary": c.primary,
-                "normal_clamp": normal_clamp,
-                "seconds": float(np.median(seconds[c.label])), "seconds_runs": tuple(seconds[c.label]),
-                "cpu_seconds": float(np.median(cpu[c.label])),
-                "taps_per_pixel": taps, "texels_per_pixel": taps * TEXELS_PER_TAP[c.fetch_used],
+                "normal_clamp": normal_clamp, "seconds": res.seconds, "seconds_runs": res.seconds_runs,
+                "cpu_seconds": res.cpu_seconds, "taps_per_pixel": res.taps_per_pixel,
+                "texels_per_pixel": res.texels_per_pixel,
                 "rmse_ref": e_ref.rmse, "mae_ref": e_ref.mae, "bias_ref": e_ref.bias,
-                "rmse_ref_seeds_mean": float(np.mean(repeats)), "rmse_ref_seeds_sd": float(np.std(repeats, ddof=1)),
-                "rmse_ref_blurred": vo.error(blurred, ref).rmse,
-                "rmse_limit": e_lim, "limit_rmse_ref": lim_ref,
+                "rmse_ref_seeds_mean": float(np.mean(seeds)), "rmse_ref_seeds_sd": float(np.std(seeds, ddof=1)),
+                "rmse_ref_blurred": error(bilateral_blur(v, gb), ref).rmse,
+                "rmse_limit": rmse_limit, "limit_rmse_ref": lim_ref,
                 "rmse_gt": e_gt.rmse, "mae_gt": e_gt.mae, "bias_gt": e_gt.bias,
                 "corr_ao": _corr(v, ao.value),
                 "gt_stderr_mean": float(np.nanmean(gt.stderr)), "gt_samples": gt.samples,
                 "ref_samples": ref_samples, "ao_rays": ao.samples, "pixels": e_ref.pixels,
                 "seed": seed, "quick": quick,
             })
+    scene = resolve(scene_name)[0]
     settings = {"scene": scene_name, "size": tuple(size), "radius": r, "seed": seed, "rays": rays,
-                "quick": quick, "ref_samples": ref_samples, "gt_samples": gt_samples}
+                "quick": quick, "ref_samples": ref_samples, "gt_samples": rows[0]["gt_samples"]}
     return Measurement(scene=scene, gb=gb, radius=r, rows=tuple(rows), images=images,
-                        reference=reference, truth=truth, ao=ao, settings=settings)
+                       reference=reference, truth=truth, ao=ao, settings=settings)
 
 
 def _check_args(scene_name, size, radius, seed, rays):
@@ -353,7 +336,7 @@ def line_vs_point(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256,
                   supplementary=True) -> list[dict]:
     """Table 1's configurations on one scene: time, taps per pixel and error (Sec. 5.1).
 
-    The scene is ``vo.scenes.get(scene_name)`` seen through ``scene.camera(size)``. For
+    The scene is ``vobscure.scenes.get(scene_name)`` seen through ``scene.camera(size)``. For
     ``normal_clamp`` False and True, every configuration of :data:`CONFIGS` (and
     :data:`SUPPLEMENTARY` when asked) is timed (median of :data:`TIMING_RUNS`) and compared
     with :func:`vobscure.vo_reference` (``samples`` 4096, 1024 with ``quick``) and with
@@ -378,7 +361,7 @@ def line_vs_point(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256,
         Fewer reference samples (for tests and smoke runs).
     supplementary : bool
         Also measure :data:`SUPPLEMENTARY` (points with a nearest fetch; one area sample
-        when ``vo.vo_area`` exists).
+        and one area sample).
 
     Returns
     -------
@@ -508,18 +491,19 @@ def thickness_at_silhouettes(scene_name="cornell_box", *, size=(256, 256), radiu
     ----------
     Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.3 and Fig. 5.
     """
-    import vobscure as vo
+    from ..metrics import error
 
     scene_name, size, radius, seed, rays = _check_args(scene_name, size, radius, seed, rays)
     m = _measure(scene_name, size, radius, seed, rays, bool(quick), True)
+    line = _methods.Config("line", samples)
     band, far = silhouette_mask(m.gb.depth, width=_width(size))
     out = []
     for nc in (False, True):
         gt = m.truth[nc]
         for f in (None,) + tuple(factors):
             t = None if f is None else f * m.radius
-            v = vo.vo_line(m.gb, radius=m.radius, samples=samples, normal_clamp=nc, thickness=t, seed=seed)
-            e_all, e_band, e_far = (vo.error(v, gt.value, mask=mask) for mask in (None, band, far))
+            v = line.run(m.gb, radius=m.radius, normal_clamp=nc, thickness=t, seed=seed)
+            e_all, e_band, e_far = (error(v, gt.value, mask=mask) for mask in (None, band, far))
             out.append({"scene": scene_name, "normal_clamp": nc, "thickness": t, "factor": f,
                         "rmse_all": e_all.rmse, "bias_all": e_all.bias,
                         "rmse_band": e_band.rmse, "bias_band": e_band.bias,
@@ -566,23 +550,6 @@ def normals_on_off(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256
 
 
 # ----------------------------------------------------------------------------- report
-def machine() -> dict:
-    """Cores available to this process and the versions that set the timings."""
-    import embreex
-    import scipy
-
-    import vobscure as vo
-
-    try:
-        from importlib.metadata import version
-        embree = version("embreex")
-    except Exception:  # pragma: no cover - embreex always installed with vobscure
-        embree = getattr(embreex, "__version__", "unknown")
-    return {"cores": len(os.sched_getaffinity(0)), "cpu": platform.processor() or platform.machine(),
-            "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
-            "embreex": embree, "vobscure": vo.__version__}
-
-
 def _f(x, digits=4) -> str:
     return "nan" if not np.isfinite(x) else f"{x:.{digits}f}"
 
@@ -673,7 +640,7 @@ def markdown(rows, claim_rows, thickness_rows=(), normal_rows=(), *, command=Non
 
 
 def main(argv=None) -> int:
-    """``python -m vobscure.experiments.claims [--quick] [--size W H] [--figure DIR]``."""
+    """``python -m vobscure.experiments.claims [--quick] [--size W H] [--seed N]``."""
     p = argparse.ArgumentParser(prog="python -m vobscure.experiments.claims",
                                 description="Reproduce the line-vs-point, thickness and normal claims "
                                             "of Loos & Sloan 2010 and print markdown tables.")
@@ -681,8 +648,6 @@ def main(argv=None) -> int:
     p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"), default=None,
                    help="image size (default 256 256, 48 48 with --quick)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--figure", metavar="DIR", default=None,
-                   help="also draw screenspace_claims.png into DIR from the same measurements")
     args = p.parse_args(argv)
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else (256, 256))
     kw = {"size": size, "seed": args.seed, "quick": args.quick}
@@ -692,17 +657,8 @@ def main(argv=None) -> int:
     given = list(sys.argv[1:] if argv is None else argv)
     command = " ".join(["python -m vobscure.experiments.claims"] + given)
     print(markdown(rows, claims(rows), thick, normals, command=command))
-    if args.figure:
-        from .figures import screenspace_claims
-
-        for path in screenspace_claims.make(args.figure, quick=args.quick, size=size, seed=args.seed):
-            print(f"wrote {path}")
     return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
-    # run the importable module's main, not this __main__ copy: the figure module imports
-    # vobscure.experiments.claims, and must find the measurements in that module's cache
-    from vobscure.experiments.claims import main as _main
-
-    sys.exit(_main())
+    sys.exit(main())

@@ -1,125 +1,65 @@
-"""``vobscure compare``: the speed/accuracy trade of the screen-space estimators on one scene.
+"""``vobscure compare``: which estimator, with how many samples, gives what accuracy at what
+cost on one scene -- answered in words and numbers.
 
-For one scene and camera, the G-buffer is rendered once; the references a request names are
-computed once per radius (and cached on disk, see :mod:`vobscure.experiments.cache`); every
-configuration (method x samples x radius) is run ``repeats`` times and its median time kept;
-every error metric is measured against every reference; and the error is split into the
-steps that cause it (:func:`vobscure.metrics.decompose`): sampling (estimate vs the converged
-screen-space VO), screen space (that vs the world-space VO) and model (world-space VO vs AO).
+A comparison is a list of :class:`~vobscure.experiments.sweep.SweepConfig` (method x samples x
+radius, from the method registry :mod:`vobscure.methods`) run by
+:func:`~vobscure.experiments.sweep.sweep` one after another in this process (timings do not
+share the machine): the G-buffer is rendered once, the references a request names are
+computed once per radius (and cached on disk, :mod:`vobscure.experiments.cache`), every
+configuration is timed (median of ``repeats`` after a warm-up) and its error measured against
+every reference, and split into the steps that cause it (:func:`vobscure.metrics.decompose`):
+sampling (estimate vs the converged screen-space VO), screen space (that vs the world-space
+VO) and model (world-space VO vs AO).
 
-Outputs (all written atomically into ``out``): ``results.csv``, ``results.md``,
-``tradeoff.png`` (error against time and against depth texels read per pixel, one curve per method,
-the Pareto front marked), ``gallery.png`` (each estimate beside the references and its error
-map) and ``provenance.json``. With ``orbit`` > 1, a camera orbit of that many frames also
-measures temporal stability (:func:`vobscure.metrics.flicker`).
+Each method is scored against the reference of *its own quantity* (registry: the VO
+estimators against the world-space VO of the ball or half-ball); numbers against a reference of
+another quantity (a VO estimator against ray-cast AO) are reported as model error, never as
+the method's accuracy. :func:`verdict` turns the rows into the answer: per reference the
+Pareto front in time and in taps, the cheapest configuration that meets a target RMSE or the
+best that fits a time budget, which error term dominates and what measurably reduces it (for
+the screen-space term, the thickness model is tried at a few thicknesses).
+
+Outputs (all written atomically into ``out``): ``results.csv``, ``results.md`` (verdict, then
+the table), ``summary.json`` (the verdict as data), ``tradeoff.png`` (error against time, taps
+and texels per pixel, one curve per method, the Pareto front marked), ``gallery.png`` (each
+estimate beside the references and its error map) and ``provenance.json``. With ``orbit`` > 1,
+a camera orbit of that many frames also measures temporal stability
+(:func:`vobscure.metrics.flicker`).
 """
 
 from __future__ import annotations
 
-import io
-import json
 import math
-import os
-import platform
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .. import methods as _methods
 from .._validate import check_choice, check_int, check_positive
+from .common import (default_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
+                     write_text)
+from .sweep import REFERENCES, InlineExecutor, SweepConfig, sweep
 
-__all__ = ["Method", "parse_methods", "compare", "CompareResult", "DEFAULT_METHODS", "REFERENCES",
-           "pareto_front", "orbit_cameras"]
+__all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front", "orbit_cameras", "parse_methods",
+           "DEFAULT_METHODS", "DEFAULT_REFERENCES", "REFERENCES", "TARGET_FACTOR", "SUGGEST_THICKNESS"]
 
-METHODS = ("point", "line", "area")
 #: The paper's Table 1 configurations (Loos & Sloan 2010): points 12 and 33, lines 5 and 9, area 1.
 DEFAULT_METHODS = "point:12,point:33,line:5,line:9,area:1"
-#: Reference quantities: the converged screen-space VO, the world-space VO (Embree), ray-cast
-#: AO within the radius, and obscurance with a linear falloff.
-REFERENCES = ("screen", "volumetric", "ao", "obscurance")
 DEFAULT_REFERENCES = ("screen", "volumetric", "ao")
-#: Depth-buffer texels one tap (sample) reads with each method's default fetch: points
-#: bilinear (4), lines nearest (1), vo_area's B-spline mip lookup 2 levels x 3 x 3 (18, of 3
-#: channels); as in :mod:`vobscure.experiments.sweep` and ``benchmarks/bench_screenspace.py``.
-TEXELS_PER_SAMPLE = {"point": 4, "line": 1, "area": 18}
-#: Default radius as a fraction of the scene's extent (as ``vobscure render``).
-RADIUS_FRACTION = 0.1
 #: Sizes of the default and the quick run.
 DEFAULT_SIZE = (256, 256)
 QUICK_SIZE = (64, 64)
 #: Metrics kept per reference.
 METRICS = ("rmse", "mae", "bias", "ssim")
+#: Default target RMSE: the best configuration's error times this factor.
+TARGET_FACTOR = 1.5
+#: Thicknesses (fractions of the radius) tried when the screen-space error dominates.
+SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
+_TERM_NAMES = {"sampling": "sampling", "screen": "screen-space model", "model": "VO-vs-AO model"}
 
-
-@dataclass(frozen=True)
-class Method:
-    """One estimator and sample count, e.g. ``Method("line", 9)`` (written ``line:9``)."""
-
-    name: str
-    samples: int
-
-    def __post_init__(self):
-        check_choice(self.name, "method", METHODS)
-        check_int(self.samples, "samples")
-
-    @property
-    def label(self) -> str:
-        return f"{self.name}:{self.samples}"
-
-    @property
-    def taps(self) -> int:
-        """Depth-buffer taps (fetches) per pixel: one per sample, except the centre of an
-        odd point pattern, which ``vo_point`` does not tap (it lies on the surface)."""
-        if self.name == "point":
-            from ..screenspace import point_taps
-
-            return point_taps(self.samples)
-        return self.samples
-
-    @property
-    def texels(self) -> int:
-        """Depth-buffer texels read per pixel: taps x texels per tap."""
-        return TEXELS_PER_SAMPLE[self.name] * self.taps
-
-    def run(self, gbuffer, *, radius, normal_clamp, thickness, seed):
-        from .. import screenspace
-
-        fn = {"point": screenspace.vo_point, "line": screenspace.vo_line, "area": screenspace.vo_area}[self.name]
-        return fn(gbuffer, radius=radius, samples=self.samples, normal_clamp=normal_clamp,
-                  thickness=thickness, seed=seed)
-
-
-def parse_methods(spec) -> tuple[Method, ...]:
-    """``"point:12,line:5"`` (or a list of such strings / Methods) -> Methods.
-
-    Examples
-    --------
-    >>> [m.label for m in parse_methods("point:12, line:5,area:1")]
-    ['point:12', 'line:5', 'area:1']
-    """
-    if isinstance(spec, str):
-        items = [s.strip() for s in spec.split(",") if s.strip()]
-    else:
-        items = list(spec)
-    if not items:
-        raise ValueError("--methods must name at least one method, e.g. 'line:9,point:12'")
-    out = []
-    for item in items:
-        if isinstance(item, Method):
-            out.append(item)
-            continue
-        name, sep, count = str(item).partition(":")
-        if not sep or not count.strip().isdigit():
-            raise ValueError(f"--methods entry {item!r} must be NAME:SAMPLES with NAME one of "
-                             f"{', '.join(METHODS)} and SAMPLES a positive integer, e.g. 'line:9'")
-        if name.strip() not in METHODS:
-            raise ValueError(f"--methods entry {item!r}: unknown method {name.strip()!r}; "
-                             f"expected one of {', '.join(METHODS)}")
-        out.append(Method(name.strip(), int(count)))
-    if len(set(out)) != len(out):
-        raise ValueError(f"--methods lists a configuration twice: {', '.join(m.label for m in out)}")
-    return tuple(out)
+parse_methods = _methods.parse
 
 
 def pareto_front(cost, error) -> np.ndarray:
@@ -160,64 +100,75 @@ def orbit_cameras(camera, frames: int, *, degrees: float = 10.0):
 
 @dataclass
 class CompareResult:
-    """What :func:`compare` measured: one row per configuration, and where it wrote them."""
+    """What :func:`compare` measured: one row per configuration, the verdict, and the files.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One per configuration (see :func:`compare`).
+    summary : dict
+        :func:`verdict` of the rows: ``text`` (the answer in sentences) and its numbers.
+    files : dict of str to Path
+    provenance : dict
+    references : dict
+        radius -> {reference name: (H, W) array}.
+    images : dict
+        (radius, label) -> (H, W) estimate.
+    """
 
     rows: list
+    summary: dict
     files: dict
     provenance: dict
     references: dict = field(repr=False, default_factory=dict)
     images: dict = field(repr=False, default_factory=dict)
 
 
-def _references(scene, gb, radius, references, *, normal_clamp, thickness, rays, samples,
-                screen_samples, seed, cache, progress):
-    """The requested reference images at one radius: {name: (H, W) array}, and cache hits."""
-    from .cache import ground_truth_cached, screen_reference_cached
+def _as_cache(cache):
+    from .cache import ReferenceCache
 
-    refs, hits = {}, {}
-    for name in references:
-        if name == "screen":
-            est, hits[name] = screen_reference_cached(
-                gb, scene, cache=cache, radius=radius, samples=screen_samples, normal_clamp=normal_clamp,
-                thickness=thickness, seed=seed)
-            refs[name] = est.value
-        elif name == "volumetric":
-            est, hits[name] = ground_truth_cached(scene, gb, cache=cache, quantity="volumetric", radius=radius,
-                                                  samples=samples, normal_clamp=normal_clamp, seed=seed,
-                                                  progress=progress)
-            refs[name] = est.value
-        else:   # ao within the radius, obscurance with the linear falloff
-            est, hits[name] = ground_truth_cached(scene, gb, cache=cache, quantity=name, radius=radius,
-                                                  rays=rays, seed=seed, progress=progress)
-            refs[name] = est.value
-    return refs, hits
+    if isinstance(cache, ReferenceCache):
+        return cache
+    if cache is True:
+        return ReferenceCache()
+    if cache is False or cache is None:
+        return ReferenceCache(enabled=False)
+    return ReferenceCache(cache)
 
 
-def _time(fn, repeats):
-    """Median seconds of ``repeats`` calls after one untimed warm-up call (pattern tables,
-    caches), and the last result."""
-    fn()
-    times, value = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        value = fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times)), value
-
-
-def _primary(references) -> str:
-    for name in ("volumetric", "screen", "ao", "obscurance"):
-        if name in references:
-            return name
-    raise AssertionError("no reference")
+def _row(result, metrics=METRICS) -> dict:
+    """A compare row from a sweep result: configuration, cost, error against every reference,
+    the method's own reference, and the decomposition."""
+    c = result.config
+    row = dict(method=c.method, samples=c.samples, label=c.label, radius=result.radius,
+               normal_clamp=c.normal_clamp, thickness=c.thickness, seconds=result.seconds,
+               taps_per_pixel=result.taps_per_pixel, texels_per_pixel=result.texels_per_pixel,
+               quantity=c.quantity, reference_only=_methods.get(c.method).reference_only)
+    for name, rep in result.errors.items():
+        for metric in metrics:
+            row[f"{name}_{metric}"] = float(getattr(rep, metric))
+    own = c.own_reference if c.own_reference in result.errors else None
+    if own is None and "screen" in result.errors and _methods.QUANTITIES[c.quantity].screen_limit:
+        own = "screen"
+    row["own_reference"] = own
+    row["own_rmse"] = row[f"{own}_rmse"] if own else float("nan")
+    row["own_bias"] = row[f"{own}_bias"] if own else float("nan")
+    if result.decomposition is not None:
+        for term in ("sampling", "screen", "model", "total"):
+            if f"{term}_rmse" in result.decomposition:
+                row[f"{term}_error_rmse"] = result.decomposition[f"{term}_rmse"]
+                row[f"{term}_error_bias"] = result.decomposition[f"{term}_bias"]
+    return row
 
 
 def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=DEFAULT_METHODS,
             normal_clamp: bool = False, thickness=None, references=DEFAULT_REFERENCES, repeats: int = 3,
-            rays: int = 256, samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
-            orbit: int = 0, quick: bool = False, out=None, cache=True, progress: bool = True,
-            plots: bool = True, write: bool = True) -> CompareResult:
-    """Measure error, time and taps per pixel of screen-space estimators on one scene.
+            rays: int = 256, volume_samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
+            orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
+            out=None, cache=True, progress: bool = True, plots: bool = True,
+            write: bool = True) -> CompareResult:
+    """Measure error, time and taps per pixel of screen-space estimators on one scene, and say
+    which to use.
 
     Parameters
     ----------
@@ -230,21 +181,37 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     radii : sequence of float, optional
         Ball radii; default 0.1 x the scene's extent.
     methods : str or sequence
-        ``"point:12,point:33,line:5,line:9,area:1"`` (the paper's Table 1) by default.
-    normal_clamp, thickness
-        Passed to every estimator and to the references they are compared with.
+        Configurations of the method registry, ``"NAME:SAMPLES[:FETCH]"`` comma-separated;
+        default the paper's Table 1, ``"point:12,point:33,line:5,line:9,area:1"``.
+    normal_clamp : bool
+        Half-ball VO (Loos & Sloan 2010, Sec. 4.4) for every estimator and VO reference.
+    thickness : float, optional
+        The thickness model (Sec. 4.3) of every estimator and of the screen-space reference.
     references : sequence of {"screen", "volumetric", "ao", "obscurance"}
         Only these are computed. The error decomposition needs "screen" and "volumetric"
         (its model term also "ao").
     repeats : int
         Timed runs per configuration; the median is kept.
-    rays, samples, screen_samples : int
-        Rays per pixel of AO/obscurance, ball samples of the world-space VO, samples of the
-        screen-space reference.
+    rays : int
+        Rays per pixel of the ``ao`` and ``obscurance`` references.
+    volume_samples : int
+        Points per ball of the world-space VO (``volumetric``).
+    screen_samples : int
+        Points per ball of the converged screen-space VO (``screen``).
     seed : int
+        Seed of the estimators and of every reference.
     orbit : int
         With N > 1, N frames of a 10-degree camera orbit measure the flicker of each
         configuration (minus the screen-space reference's own frame-to-frame change).
+    target_rmse : float, optional
+        The accuracy the verdict looks for (against each method's own reference); default
+        :data:`TARGET_FACTOR` times the best configuration's error.
+    budget_ms : float, optional
+        A time budget per frame: the verdict names the most accurate configuration within it.
+    suggest : bool
+        When the screen-space term dominates, time the best configuration with the thickness
+        model at :data:`SUGGEST_THICKNESS` times the radius and report what it gives (a few
+        estimator calls: on by default).
     quick : bool
         64 x 64, one repeat, fewer rays and samples: the whole run in seconds.
     out : path, optional
@@ -252,6 +219,7 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     cache : bool, path or ReferenceCache
         True: the default user cache folder; a path: that folder; False: no cache.
     progress : bool
+        Progress bars.
     plots : bool
         Write the PNGs.
     write : bool
@@ -260,6 +228,12 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     Returns
     -------
     CompareResult
+        ``rows`` hold per configuration ``method, samples, label, radius, normal_clamp,
+        thickness, seconds, taps_per_pixel, texels_per_pixel, quantity``,
+        ``<reference>_<metric>`` for every reference and metric of :data:`METRICS`,
+        ``own_reference, own_rmse, own_bias`` (the reference of the method's own quantity)
+        and, with the screen and volumetric references, the decomposition
+        ``<term>_error_rmse`` / ``_bias``.
 
     Examples
     --------
@@ -268,14 +242,12 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     ...                                      references=("screen",), cache=False, progress=False,
     ...                                      out=tempfile.mkdtemp(), plots=False)
     >>> r = res.rows[0]
-    >>> r["method"], r["samples"], r["taps_per_pixel"], r["texels_per_pixel"]
-    ('line', 5, 5, 5)
+    >>> r["method"], r["samples"], r["taps_per_pixel"], r["texels_per_pixel"], r["own_reference"]
+    ('line', 5, 5, 5, 'screen')
     """
-    from .. import render_gbuffer
-    from ..metrics import decompose, error, flicker
-    from .cache import ReferenceCache
+    from ..scenes import resolve
 
-    methods = parse_methods(methods)
+    configs = parse_methods(methods)
     references = tuple(references)
     if not references:
         raise ValueError("references must name at least one of " + ", ".join(REFERENCES))
@@ -285,250 +257,304 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
     if thickness is not None:
         thickness = check_positive(thickness, "thickness")
+    if target_rmse is not None:
+        target_rmse = check_positive(target_rmse, "target_rmse")
+    if budget_ms is not None:
+        budget_ms = check_positive(budget_ms, "budget_ms")
     if quick:
-        repeats, rays, samples, screen_samples = 1, min(rays, 64), min(samples, 256), min(screen_samples, 512)
+        repeats, rays = 1, min(rays, 64)
+        volume_samples, screen_samples = min(volume_samples, 256), min(screen_samples, 512)
         orbit = min(orbit, 4) if orbit else 0
-    sc, scene_name = _scene(scene)
+    sc, scene_name = resolve(scene)
     if camera is None:
         size = tuple(size) if size is not None else (QUICK_SIZE if quick else DEFAULT_SIZE)
         camera = sc.camera(size)
     if radii is None:
-        radii = (RADIUS_FRACTION * sc.extent,)
+        radii = (default_radius(sc),)
     radii = tuple(check_positive(r, "radius") for r in np.atleast_1d(radii))
-    if isinstance(cache, ReferenceCache):
-        store = cache
-    elif cache is True:
-        store = ReferenceCache()
-    elif cache is False or cache is None:
-        store = ReferenceCache(enabled=False)
-    else:
-        store = ReferenceCache(cache)
+    store = _as_cache(cache)
     out = Path(out) if out is not None else Path("vobscure-out") / f"compare-{scene_name}"
 
     t_start = time.perf_counter()
-    gb = render_gbuffer(sc, camera)
-    primary = _primary(references)
+    common = dict(scene=sc, camera=camera, normal_clamp=normal_clamp, thickness=thickness, seed=seed,
+                  references=references, rays=rays, volume_samples=volume_samples,
+                  screen_samples=screen_samples, reference_seed=seed)
+    sweep_configs = [SweepConfig(method=c.method, samples=c.samples, fetch=c.fetch, radius=radius,
+                                 repeats=repeats, **common) for radius in radii for c in configs]
+    results = sweep(sweep_configs, executor=InlineExecutor(), cache=store, keep_images=True,
+                    progress=progress)
     rows, images, all_refs, hits = [], {}, {}, {}
-    steps = len(radii) * len(methods)
-    bar = _bar(steps, "compare", progress)
-    for radius in radii:
-        refs, h = _references(sc, gb, radius, references, normal_clamp=normal_clamp, thickness=thickness,
-                              rays=rays, samples=samples, screen_samples=screen_samples, seed=seed,
-                              cache=store, progress=progress)
-        all_refs[radius] = refs
-        hits[radius] = h
-        for m in methods:
-            seconds, est = _time(lambda: m.run(gb, radius=radius, normal_clamp=normal_clamp,
-                                               thickness=thickness, seed=seed), repeats)
-            row = dict(method=m.name, samples=m.samples, radius=float(radius), normal_clamp=bool(normal_clamp),
-                       thickness=thickness, seconds=seconds, taps_per_pixel=m.taps,
-                       texels_per_pixel=m.texels)
-            for name, ref in refs.items():
-                rep = error(est, ref)
-                for metric in METRICS:
-                    row[f"{name}_{metric}"] = float(getattr(rep, metric))
-            if "screen" in refs and "volumetric" in refs:
-                dec = decompose(est, refs["screen"], refs["volumetric"], ao=refs.get("ao"),
-                                obscurance=refs.get("obscurance"))
-                for term in ("sampling", "screen", "model", "total"):
-                    if term in dec.summary:
-                        row[f"{term}_error_rmse"] = dec.summary[term].rmse
-                        row[f"{term}_error_bias"] = dec.summary[term].bias
-            rows.append(row)
-            images[(radius, m.label)] = est
-            bar.update(1)
-    bar.close()
-
+    for res in results:
+        rows.append(_row(res))
+        images[(res.radius, res.config.label)] = res.image
+        all_refs.setdefault(res.radius, {k: v.value for k, v in res.references.items()})
+        hits.setdefault(res.radius, res.cache_hits)
+    gb = results[0].gbuffer
     if orbit > 1:
-        _orbit(sc, camera, rows, methods, radii, orbit, normal_clamp=normal_clamp, thickness=thickness,
-               screen_samples=screen_samples, seed=seed, progress=progress, flicker=flicker)
+        _orbit(sc, camera, rows, configs, radii, orbit, normal_clamp=normal_clamp, thickness=thickness,
+               screen_samples=screen_samples, seed=seed, cache=store, progress=progress)
+    thickness_trials = []
+    if suggest and thickness is None and "volumetric" in references:
+        thickness_trials = _thickness_trials(rows, images, all_refs, gb, normal_clamp=normal_clamp,
+                                             seed=seed, repeats=repeats)
+    summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
 
     provenance = dict(
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),
-        methods=[m.label for m in methods], normal_clamp=bool(normal_clamp), thickness=thickness,
-        references=list(references), primary_reference=primary, repeats=repeats, rays=rays, samples=samples,
+        methods=[c.label for c in configs], normal_clamp=bool(normal_clamp), thickness=thickness,
+        references=list(references), repeats=repeats, rays=rays, volume_samples=volume_samples,
         screen_samples=screen_samples, seed=seed, orbit=orbit, quick=bool(quick),
+        target_rmse=target_rmse, budget_ms=budget_ms,
         cache=None if not store.enabled else str(store.directory),
         cache_hits={f"{r:g}": h for r, h in hits.items()}, seconds=time.perf_counter() - t_start,
-        machine=_machine(), date=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
-    files = _write(out, rows, provenance, all_refs, images, gb, primary, plots) if write else {}
-    return CompareResult(rows=rows, files=files, provenance=provenance, references=all_refs, images=images)
+        machine=machine(), date=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    files = _write(out, rows, summary, provenance, all_refs, images, gb, plots) if write else {}
+    return CompareResult(rows=rows, summary=summary, files=files, provenance=provenance,
+                         references=all_refs, images=images)
 
 
-def _orbit(sc, camera, rows, methods, radii, frames, *, normal_clamp, thickness, screen_samples, seed,
-           progress, flicker):
-    """Add ``flicker`` (estimate minus reference) and ``flicker_raw`` to every row."""
-    from .. import render_gbuffer, vo_reference
+def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness, screen_samples, seed,
+           cache, progress):
+    """Add ``flicker`` (estimate minus reference) and ``flicker_raw`` to every row: the same
+    configurations over an orbit of cameras, measured (not timed) by the sweep."""
+    from ..metrics import flicker
 
     cams = orbit_cameras(camera, frames)
-    seq = {key: [] for key in [(r, m.label) for r in radii for m in methods]}
-    refs = {r: [] for r in radii}
-    bar = _bar(frames, "orbit", progress)
-    for cam in cams:
-        gb = render_gbuffer(sc, cam)
-        for r in radii:
-            refs[r].append(vo_reference(gb, radius=r, samples=screen_samples, normal_clamp=normal_clamp,
-                                        thickness=thickness, seed=seed).value)
-            for m in methods:
-                seq[(r, m.label)].append(m.run(gb, radius=r, normal_clamp=normal_clamp, thickness=thickness,
-                                               seed=seed))
-        bar.update(1)
-    bar.close()
+    sweep_configs = [SweepConfig(scene=sc, camera=cam, method=c.method, samples=c.samples, fetch=c.fetch,
+                                 radius=r, normal_clamp=normal_clamp, thickness=thickness, seed=seed,
+                                 repeats=0, references=("screen",), screen_samples=screen_samples,
+                                 reference_seed=seed)
+                     for cam in cams for r in radii for c in configs]
+    results = sweep(sweep_configs, executor=InlineExecutor(), cache=cache, keep_images=True, progress=progress)
+    seq, refs = {}, {}
+    for res in results:
+        key = (res.radius, res.config.label)
+        seq.setdefault(key, []).append(res.image)
+        refs.setdefault(key, []).append(res.references["screen"].value)
     for row in rows:
-        key = (row["radius"], f"{row['method']}:{row['samples']}")
-        f = flicker(np.stack(seq[key]), np.stack(refs[row["radius"]]))
+        key = (row["radius"], row["label"])
+        f = flicker(np.stack(seq[key]), np.stack(refs[key]))
         row["flicker"] = float(f.value)
         row["flicker_raw"] = float(f.estimate_change)
 
 
-def _scene(scene):
-    from ..scenes import Scene, get, load, names
+def _thickness_trials(rows, images, refs, gb, *, normal_clamp, seed, repeats) -> list[dict]:
+    """The most accurate shippable configuration at the first radius, re-run with the thickness
+    model at :data:`SUGGEST_THICKNESS` x radius, against the world-space VO."""
+    from ..metrics import error
+    from .common import time_calls
 
-    if isinstance(scene, Scene):
-        return scene, "custom"
-    spec = str(scene)
-    if spec in names():
-        return get(spec), spec
-    path = Path(spec)
-    if path.suffix or path.exists():
-        return load(path), path.stem
-    raise ValueError(f"scene {spec!r} is neither a built-in scene ({', '.join(names())}) nor a mesh file")
+    radius = rows[0]["radius"]
+    cands = [r for r in rows if r["radius"] == radius and not r["reference_only"]
+             and np.isfinite(r.get("volumetric_rmse", np.nan))]
+    if not cands:
+        return []
+    best = min(cands, key=lambda r: r["volumetric_rmse"])
+    config = _methods.parse([best["label"]])[0]
+    truth = refs[radius]["volumetric"]
+    trials = []
+    for factor in SUGGEST_THICKNESS:
+        t = factor * radius
+        timings, values = time_calls({"run": lambda: config.run(gb, radius=radius, normal_clamp=normal_clamp,
+                                                                 thickness=t, seed=seed)}, max(1, repeats))
+        rep = error(getattr(values["run"], "value", values["run"]), truth)
+        trials.append(dict(label=best["label"], radius=radius, factor=factor, thickness=t,
+                           volumetric_rmse=rep.rmse, volumetric_bias=rep.bias, seconds=timings["run"].median,
+                           baseline_rmse=best["volumetric_rmse"]))
+    return trials
 
 
-def _bar(total, desc, enabled):
-    from tqdm.auto import tqdm
+# --------------------------------------------------------------------------- the verdict
+def _ms(seconds) -> str:
+    return f"{1e3 * seconds:.1f} ms"
 
-    return tqdm(total=total, desc=desc, disable=not enabled, leave=False)
 
+def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> dict:
+    """The answer to "which estimator, with how many samples, at what cost?" from compare rows.
 
-def _machine() -> dict:
-    import numpy
-    import scipy
+    Each configuration is judged against its own reference (``own_reference``: the reference
+    of the quantity it estimates). Per own reference (and radius): the Pareto front in time
+    and in taps, the cheapest configuration meeting the target RMSE (default
+    :data:`TARGET_FACTOR` x the best error) in time and in taps, the most accurate one
+    within ``budget_ms``; then which term of the decomposition dominates the best
+    configuration's error and what reduces it, with the measured thickness trials when given.
 
-    from .. import __version__
+    Returns
+    -------
+    dict
+        ``text`` (list of sentences), ``groups`` (per reference and radius: ``front_time``,
+        ``front_taps``, ``target_rmse``, ``cheapest_time``, ``cheapest_taps``,
+        ``best_in_budget``, ``best``), ``dominant`` (per radius: the terms' RMSE and the
+        dominant one), ``thickness`` (the trials and the best of them).
 
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        cores = os.cpu_count()
-    return dict(cores=cores, machine=platform.machine(), python=platform.python_version(),
-                numpy=numpy.__version__, scipy=scipy.__version__, vobscure=__version__)
+    Examples
+    --------
+    >>> rows = [dict(label="line:5", method="line", radius=1.0, seconds=0.004, taps_per_pixel=5,
+    ...              own_reference="screen", own_rmse=0.05),
+    ...         dict(label="point:33", method="point", radius=1.0, seconds=0.07, taps_per_pixel=32,
+    ...              own_reference="screen", own_rmse=0.02)]
+    >>> v = verdict(rows, target_rmse=0.03)
+    >>> v["groups"][0]["cheapest_time"], [r for r in v["groups"][0]["front_time"]]
+    ('point:33', ['line:5', 'point:33'])
+    """
+    text, groups, dominant = [], [], []
+    shippable = [r for r in rows if not r.get("reference_only", False)]
+    keys = sorted({(r["own_reference"], r["radius"]) for r in shippable if r.get("own_reference")},
+                  key=lambda k: (REFERENCES.index(k[0]), k[1]))
+    for ref, radius in keys:
+        sel = [r for r in shippable if r["own_reference"] == ref and r["radius"] == radius
+               and np.isfinite(r["own_rmse"])]
+        if not sel:
+            continue
+        err = np.array([r["own_rmse"] for r in sel])
+        best = sel[int(np.argmin(err))]
+        target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best["own_rmse"]
+        g = dict(reference=ref, radius=radius, target_rmse=target, best=best["label"], best_rmse=best["own_rmse"])
+        for cost, name in (("seconds", "time"), ("taps_per_pixel", "taps")):
+            x = np.array([r[cost] for r in sel], float)
+            g[f"front_{name}"] = [sel[i]["label"] for i in pareto_front(x, err)]
+            ok = [r for r in sel if r["own_rmse"] <= target and np.isfinite(r[cost])]
+            g[f"cheapest_{name}"] = min(ok, key=lambda r: (r[cost], r["own_rmse"]))["label"] if ok else None
+        if budget_ms is not None:
+            within = [r for r in sel if np.isfinite(r["seconds"]) and 1e3 * r["seconds"] <= budget_ms]
+            g["best_in_budget"] = min(within, key=lambda r: r["own_rmse"])["label"] if within else None
+        groups.append(g)
+        what = ("the converged screen-space VO (sampling error only; no world-space reference was computed)"
+                if ref == "screen" else f"the ray-cast {'world-space VO' if ref == 'volumetric' else ref}")
+        by_label = {r["label"]: r for r in sel}
+        lines = [f"Against {what} at R = {radius:.4g}: the most accurate is {best['label']} "
+                 f"(RMSE {best['own_rmse']:.4f}, {_ms(best['seconds'])}, {best['taps_per_pixel']} taps/px)."]
+        for name, unit in (("time", "time"), ("taps", "taps per pixel")):
+            cheap = g[f"cheapest_{name}"]
+            if cheap is None:
+                lines.append(f"No configuration reaches RMSE {target:.4f}.")
+                break
+            c = by_label[cheap]
+            lines.append(f"Cheapest in {unit} with RMSE <= {target:.4f}"
+                         f"{'' if target_rmse is not None else f' ({TARGET_FACTOR:g} x the best)'}: "
+                         f"{cheap} (RMSE {c['own_rmse']:.4f}, {_ms(c['seconds'])}, {c['taps_per_pixel']} taps/px).")
+        lines.append(f"Pareto front in time: {', '.join(g['front_time'])}; in taps: {', '.join(g['front_taps'])}.")
+        if budget_ms is not None:
+            b = g["best_in_budget"]
+            lines.append(f"Within {budget_ms:g} ms: " + (f"{b} (RMSE {by_label[b]['own_rmse']:.4f})." if b
+                                                         else "no configuration fits."))
+        text.append(" ".join(lines))
+    # which error term dominates, for the most accurate configuration against the world-space VO
+    for radius in sorted({r["radius"] for r in shippable}):
+        sel = [r for r in shippable if r["radius"] == radius and "screen_error_rmse" in r]
+        if not sel:
+            continue
+        best = min(sel, key=lambda r: r.get("volumetric_rmse", np.inf))
+        terms = {t: best[f"{t}_error_rmse"] for t in ("sampling", "screen", "model") if f"{t}_error_rmse" in best}
+        top = max(terms, key=terms.get)
+        dominant.append(dict(radius=radius, label=best["label"], dominant=top, **{f"{t}_rmse": v for t, v in terms.items()}))
+        parts = ", ".join(f"{_TERM_NAMES[t]} {v:.4f}" for t, v in terms.items())
+        sentence = (f"Error of {best['label']} at R = {radius:.4g}, split by cause (RMSE): {parts}; "
+                    f"the {_TERM_NAMES[top]} error dominates. ")
+        if top == "sampling":
+            sentence += ("More samples or a method further along the front reduce it; "
+                         "the bilateral blur (vobscure.bilateral_blur) trades it for bias.")
+        elif top == "screen":
+            sentence += ("The depth buffer treats every surface as infinitely thick and knows nothing "
+                         "behind it or outside the image; more samples cannot fix that.")
+        else:
+            sentence += ("Even the exact world-space VO differs this much from ray-cast AO: VO is not AO. "
+                         "The normal clamp (--normals, the half-ball) or an AO estimator targets AO more closely.")
+        if "model" in terms and top != "model":
+            sentence += (f" Against ray-cast AO, a different quantity, it is further off by the model "
+                         f"error ({terms['model']:.4f}); that is not the estimator's sampling accuracy.")
+        text.append(sentence)
+    thick = None
+    if thickness_trials:
+        best_t = min(thickness_trials, key=lambda t: t["volumetric_rmse"])
+        thick = dict(trials=list(thickness_trials), best=best_t)
+        tried = ", ".join(f"{t['thickness']:.3g} ({t['factor']:g} R): {t['volumetric_rmse']:.4f}"
+                          for t in thickness_trials)
+        gain = best_t["baseline_rmse"] - best_t["volumetric_rmse"]
+        if gain > 0:
+            text.append(f"Thickness model (Loos & Sloan 2010, Sec. 4.3), measured on {best_t['label']}: "
+                        f"RMSE against the world-space VO {best_t['baseline_rmse']:.4f} without it; {tried}. "
+                        f"Use --thickness {best_t['thickness']:.3g}: RMSE {best_t['volumetric_rmse']:.4f} "
+                        f"({gain / best_t['baseline_rmse']:.0%} lower) in {_ms(best_t['seconds'])}.")
+        else:
+            text.append(f"Thickness model measured on {best_t['label']} ({tried}): no thickness beats "
+                        f"none (RMSE {best_t['baseline_rmse']:.4f}).")
+    return dict(text=text, groups=groups, dominant=dominant, thickness=thick)
 
 
 # --------------------------------------------------------------------------- writing
-def _columns(rows) -> list:
-    cols = []
-    for row in rows:
-        for k in row:
-            if k not in cols:
-                cols.append(k)
-    return cols
-
-
-def _csv_text(rows) -> str:
-    import csv
-
-    buf = io.StringIO()
-    cols = _columns(rows)
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-    w.writeheader()
-    for row in rows:
-        w.writerow({k: ("" if row.get(k) is None else row.get(k)) for k in cols})
-    return buf.getvalue()
-
-
-def _fmt(v) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, float):
-        if not math.isfinite(v):
-            return "nan"
-        return f"{v:.4g}"
-    return str(v)
-
-
-def _markdown(rows, provenance) -> str:
-    cols = [c for c in _columns(rows) if c not in ("normal_clamp", "thickness")]
-    lines = [f"# vobscure compare: {provenance['scene']}", "",
-             f"Camera {provenance['camera']['size'][0]} x {provenance['camera']['size'][1]}, "
-             f"normal clamp: {_fmt(provenance['normal_clamp'])}, thickness: {'none' if provenance['thickness'] is None else _fmt(provenance['thickness'])}, "
-             f"median of {provenance['repeats']} run(s), seed {provenance['seed']}. "
-             f"Errors are against each reference (`<reference>_<metric>`); the decomposition "
-             f"columns split the error into sampling + screen space + model.", "",
-             "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for row in rows:
-        lines.append("| " + " | ".join(_fmt(row.get(c)) for c in cols) + " |")
+def _markdown(rows, summary, provenance) -> str:
+    w, h = provenance["camera"]["size"]
+    cols = ["label", "quantity", "radius", "seconds", "taps_per_pixel", "texels_per_pixel", "own_reference",
+            "own_rmse", "own_bias"]
+    refs = provenance["references"]
+    cols += [f"{ref}_{m}" for ref in refs for m in METRICS]
+    cols += [c for c in ("sampling_error_rmse", "screen_error_rmse", "model_error_rmse", "total_error_rmse",
+                         "flicker") if any(c in r for r in rows)]
+    headers = {}
+    own = {r["own_reference"] for r in rows}
+    for ref in refs:
+        if ref not in own and ref != "screen":
+            for m in METRICS:
+                headers[f"{ref}_{m}"] = f"{ref}_{m} (model error)"
+    thick = "none" if provenance["thickness"] is None else f"{provenance['thickness']:.4g}"
+    lines = [f"# vobscure compare: {provenance['scene']}", "", "## Verdict", ""]
+    lines += [f"- {s}" for s in summary["text"]] or ["- (no configuration could be scored)"]
+    lines += ["", "## Measurements", "",
+              f"Camera {w} x {h}, normal clamp: {'yes' if provenance['normal_clamp'] else 'no'}, thickness: "
+              f"{thick}, median of {provenance['repeats']} run(s), seed {provenance['seed']}. Each row is "
+              f"scored against the reference of its own quantity (`own_reference`); columns against a "
+              f"reference of another quantity are marked *model error*. `<term>_error_rmse` split the error "
+              f"into sampling + screen space + model.", "",
+              markdown_table(rows, cols, headers=headers), ""]
+    if summary.get("thickness"):
+        lines += ["## Thickness trials", "",
+                  markdown_table(summary["thickness"]["trials"],
+                                 ["label", "factor", "thickness", "volumetric_rmse", "volumetric_bias", "seconds"]), ""]
     mach = provenance["machine"]
-    lines += ["", "Machine: " + ", ".join(f"{k} {v}" for k, v in mach.items()) + ".", ""]
+    lines += ["Machine: " + ", ".join(f"{k} {v}" for k, v in mach.items()) + ".", ""]
     return "\n".join(lines)
 
 
-def _write(out: Path, rows, provenance, refs, images, gb, primary, plots) -> dict:
-    from .._io import atomic_write
-
+def _write(out: Path, rows, summary, provenance, refs, images, gb, plots) -> dict:
     out.mkdir(parents=True, exist_ok=True)
-    files = {}
-    files["results.csv"] = atomic_write(out / "results.csv", lambda fh: fh.write(_csv_text(rows).encode()))
-    files["results.md"] = atomic_write(out / "results.md", lambda fh: fh.write(_markdown(rows, provenance).encode()))
+    files = {"results.csv": write_csv(out / "results.csv", rows),
+             "results.md": write_text(out / "results.md", _markdown(rows, summary, provenance)),
+             "summary.json": write_json(out / "summary.json", summary)}
     if plots:
         files["tradeoff.png"] = _tradeoff(out / "tradeoff.png", rows, provenance)
-        files["gallery.png"] = _gallery(out / "gallery.png", rows, refs, images, gb, primary)
-    text = json.dumps(provenance, indent=2, sort_keys=True, default=_json_default)
-    files["provenance.json"] = atomic_write(out / "provenance.json", lambda fh: fh.write(text.encode()))
+        files["gallery.png"] = _gallery(out / "gallery.png", rows, refs, images, gb)
+    files["provenance.json"] = write_json(out / "provenance.json", provenance)
     return files
 
 
-def _json_default(v):
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    return str(v)
-
-
-def _figure(width, height):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, height), dpi=100, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _save(fig, path):
-    from .._io import atomic_write
-
-    return atomic_write(path, lambda fh: fig.savefig(fh, format="png"))
-
-
-_METHOD_COLORS = {"point": "#d62728", "line": "#1f77b4", "area": "#2ca02c"}
+_METHOD_COLORS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22")
 _RADIUS_MARKERS = "os^Dv<>"
 
 
 def _tradeoff(path, rows, provenance):
-    refs = [r for r in provenance["references"]]
     from matplotlib.ticker import LogLocator, NullFormatter
 
+    refs = list(provenance["references"])
     costs = (("seconds", "median seconds per frame"), ("taps_per_pixel", "depth taps per pixel"),
              ("texels_per_pixel", "depth texels read per pixel"))
-    fig = _figure(4.2 * len(costs), 3.2 * len(refs) + 0.6)
+    fig = new_figure(4.2 * len(costs), 3.2 * len(refs) + 0.6)
     axes = fig.subplots(len(refs), len(costs), squeeze=False)
     radii = sorted({row["radius"] for row in rows})
+    names = list(dict.fromkeys(row["method"] for row in rows))
     for i, ref in enumerate(refs):
         for j, (cost, label) in enumerate(costs):
             ax = axes[i, j]
             x = np.array([row[cost] for row in rows], float)
             y = np.array([row[f"{ref}_rmse"] for row in rows], float)
-            for name in METHODS:
+            for n_m, name in enumerate(names):
                 for k, radius in enumerate(radii):
                     sel = [n for n, row in enumerate(rows) if row["method"] == name and row["radius"] == radius]
                     if not sel:
                         continue
                     sel = sorted(sel, key=lambda n: rows[n]["samples"])
                     ax.plot(x[sel], y[sel], "-", marker=_RADIUS_MARKERS[k % len(_RADIUS_MARKERS)],
-                            color=_METHOD_COLORS[name], label=f"{name} (R={radius:.3g})")
+                            color=_METHOD_COLORS[n_m % len(_METHOD_COLORS)], label=f"{name} (R={radius:.3g})")
                     for n in sel:
                         ax.annotate(str(rows[n]["samples"]), (x[n], y[n]), textcoords="offset points",
                                     xytext=(3, 3), fontsize=7)
@@ -541,22 +567,24 @@ def _tradeoff(path, rows, provenance):
             ax.xaxis.set_minor_locator(LogLocator(subs="auto"))
             ax.xaxis.set_minor_formatter(NullFormatter())  # unlabelled minor ticks never overlap
             ax.set_xlabel(label)
-            ax.set_ylabel(f"RMSE vs {ref}")
+            own = any(row["own_reference"] == ref for row in rows)
+            ax.set_ylabel(f"RMSE vs {ref}" + ("" if own or ref == "screen" else " (model error)"))
             ax.grid(alpha=0.3)
             if i == 0 and j == 0:
                 ax.legend(fontsize=7)
     fig.suptitle(f"{provenance['scene']}: error against cost (labels: samples)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
-def _gallery(path, rows, refs, images, gb, primary):
+def _gallery(path, rows, refs, images, gb):
     radius = rows[0]["radius"]
     ref_imgs = refs[radius]
-    configs = [f"{row['method']}:{row['samples']}" for row in rows if row["radius"] == radius]
+    primary = next(n for n in ("volumetric", "screen", "ao", "obscurance") if n in ref_imgs)
+    configs = [row["label"] for row in rows if row["radius"] == radius]
     ncol = max(len(ref_imgs), 4)
-    nrow = 1 + math.ceil(len(configs) / max(ncol // 2, 1))
     per_row = max(ncol // 2, 1)
-    fig = _figure(2.2 * ncol, 2.3 * nrow)
+    nrow = 1 + math.ceil(len(configs) / per_row)
+    fig = new_figure(2.2 * ncol, 2.3 * nrow)
     axes = fig.subplots(nrow, ncol, squeeze=False)
     for ax in axes.ravel():
         ax.set_axis_off()
@@ -575,4 +603,15 @@ def _gallery(path, rows, refs, images, gb, primary):
         axes[r, c + 1].imshow(np.ma.masked_where(bg, diff), cmap="RdBu_r", vmin=-lim, vmax=lim)
         axes[r, c + 1].set_title(f"error vs {primary}: RMSE {rmse:.3f}", fontsize=8)
     fig.suptitle(f"R = {radius:.3g}: estimates and their error maps (red: too open)")
-    return _save(fig, path)
+    return save_figure(fig, path)
+
+
+def report_text(result: CompareResult) -> str:
+    """The verdict and the files, as printed by ``vobscure compare``."""
+    lines = [f"{result.provenance['scene']}: {len(result.rows)} configurations in "
+             f"{result.provenance['seconds']:.1f} s.", ""]
+    lines += [f"* {s}" for s in result.summary["text"]]
+    lines.append("")
+    lines += [f"wrote {p}" for p in result.files.values()]
+    return "\n".join(lines)
+

@@ -24,7 +24,7 @@ Examples
 >>> from concurrent.futures import ThreadPoolExecutor
 >>> from vobscure.experiments.sweep import SweepConfig, sweep
 >>> configs = [SweepConfig("slab", method, samples, size=(8, 8), radius=0.5, references=("screen",),
-...                        reference_samples=64) for method, samples in (("line", 5), ("area", 1))]
+...                        screen_samples=64) for method, samples in (("line", 5), ("area", 1))]
 >>> with ThreadPoolExecutor(1) as pool:
 ...     results = sweep(configs, executor=pool, progress=False)
 >>> [(r.config.label, r.taps_per_pixel, r.errors["screen"].pixels == r.pixels) for r in results]
@@ -33,67 +33,57 @@ Examples
 
 from __future__ import annotations
 
-import csv
-import io
 import json
-import math
 import multiprocessing
 import os
 import threading
-import time
 from collections import OrderedDict
 from collections.abc import Iterable, Mapping
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from tqdm.auto import tqdm
 
-from .._io import atomic_write
+from .. import methods as _methods
 from .._validate import check_choice, check_int, check_positive
 from ..metrics import DECOMPOSITION_TERMS
+from .common import default_radius, progress_bar, write_text
 
-__all__ = ["SweepConfig", "SweepResult", "sweep", "results_to_csv", "results_to_markdown",
-           "METHODS", "REFERENCES", "TIMING_FIELDS", "DEFAULT_SIZE", "DEFAULT_WORKERS",
-           "RADIUS_FRACTION"]
+__all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "results_to_csv",
+           "results_to_markdown", "REFERENCES", "TIMING_FIELDS", "DEFAULT_SIZE", "DEFAULT_WORKERS"]
 
-#: Estimators a configuration can run: ``vo_point``, ``vo_line``, ``vo_area``, ``vo_reference``.
-METHODS = ("point", "line", "area", "reference")
 #: References an estimate can be compared with: the converged screen-space VO
 #: (:func:`vobscure.vo_reference`, same settings as the estimate) and the ray-cast
 #: world-space VO, ambient occlusion within the radius and obscurance (linear falloff).
 REFERENCES = ("screen", "volumetric", "ao", "obscurance")
 #: Fields of :meth:`SweepResult.as_row` that are measured times and so differ between runs.
-TIMING_FIELDS = ("seconds", "seconds_runs")
+TIMING_FIELDS = ("seconds", "seconds_runs", "cpu_seconds")
 #: Image size (width, height) when a configuration gives neither size nor camera.
 DEFAULT_SIZE = (64, 64)
-#: Ball radius as a fraction of the scene's extent when a configuration gives none.
-RADIUS_FRACTION = 0.1
 #: Processes of the default local executor.
 DEFAULT_WORKERS = 2
 #: Scenes, G-buffers and references a worker process keeps in memory (least recently used
 #: first out; a view with its scene and four references takes six).
 MEMO_ENTRIES = 12
-#: The fetch each method uses (the estimators' defaults) and the depth texels one tap reads
-#: (nearest 1, bilinear 4, vo_area's quadratic B-spline mip lookup 18; as in
-#: :data:`vobscure.experiments.claims.TEXELS_PER_TAP`).
-FETCH = {"point": "bilinear", "line": "nearest", "area": "bspline", "reference": "bilinear"}
-TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "bspline": 18}
 #: Statistics of :class:`~vobscure.metrics.ErrorReport` written per reference by :meth:`SweepResult.as_row`.
 ERROR_STATS = ("rmse", "mae", "bias", "max_abs", "psnr", "ssim", "pixels")
 
 
-def _scene_spec(scene) -> str:
-    from ..scenes import names
+def _scene_spec(scene):
+    """A scene name or path that every worker can resolve, or a Scene (for executors in this
+    process only: a Scene is not sent to other processes)."""
+    from ..scenes import Scene, names
     from ..scenes.io import SUPPORTED_EXTENSIONS
 
+    if isinstance(scene, Scene):
+        return scene
     if isinstance(scene, os.PathLike):
         scene = os.fspath(scene)
     if not isinstance(scene, str):
         raise ValueError(f"scene must be a built-in scene name or a mesh path, got {type(scene).__name__}")
     if scene in names() or Path(scene).suffix.lower() in SUPPORTED_EXTENSIONS:
-        return scene
+        return scene                 # resolved (built or loaded) in the worker
     raise ValueError(f"scene must be one of {', '.join(names())} or a mesh file "
                      f"({', '.join(SUPPORTED_EXTENSIONS)}), got {scene!r}")
 
@@ -104,34 +94,44 @@ class SweepConfig:
 
     Parameters
     ----------
-    scene : str
+    scene : str or Scene
         A built-in scene (:func:`vobscure.scenes.names`) or a mesh file (a path that every
-        worker can read).
-    method : {"point", "line", "area", "reference"}
+        worker can read); a :class:`~vobscure.scenes.Scene` object only with an executor
+        that runs in this process (:class:`InlineExecutor`, a thread pool).
+    method : str
+        A method of the registry (:func:`vobscure.methods.names`): ``"point"``, ``"line"``,
+        ``"area"``, ``"reference"``, ...
     samples : int
-        Samples of the estimator (points, lines, area samples, or the reference's points).
+        Samples of the method (points, lines, area samples, or the reference's points).
+    fetch : str, optional
+        Another depth fetch than the method's default (e.g. ``"nearest"`` for points).
     radius : float, optional
-        Ball radius; default :data:`RADIUS_FRACTION` times the scene's extent.
+        Ball radius; default :data:`~vobscure.experiments.common.RADIUS_FRACTION` times the
+        scene's extent.
     size : (int, int), optional
         Image (width, height). Default the camera's size, else :data:`DEFAULT_SIZE`.
     camera : Camera or mapping, optional
         The view (a :class:`~vobscure.Camera` or its ``to_dict()``); rendered at ``size``
         when both are given. Default ``scene.camera(size)``, the scene's suggested view.
     normal_clamp : bool
+        Half-ball VO (Loos & Sloan 2010, Sec. 4.4) for the estimate and the VO references.
     thickness : float, optional
+        The thickness model (Sec. 4.3) of the estimate and of the screen-space reference.
     falloff : {"constant", "quadratic"}
         As in the estimators; the screen-space and world-space VO references use the same.
     seed : int
         Seed of the estimator.
     repeats : int
-        Timed runs; the median is reported.
+        Timed runs after the untimed first call; the median is reported. 0: not timed
+        (``seconds`` is NaN), for configurations that only measure error.
     references : tuple of str
         Some of :data:`REFERENCES` (a single name is accepted).
     rays : int
-        Rays per pixel of the ray-cast ``ao`` and ``obscurance`` references and points per
-        ball of the ``volumetric`` one.
-    reference_samples : int
-        Points per ball of the ``screen`` reference.
+        Rays per pixel of the ray-cast ``ao`` and ``obscurance`` references (directions).
+    volume_samples : int
+        Points per ball of the world-space ``volumetric`` reference.
+    screen_samples : int
+        Points per ball of the ``screen`` reference (:func:`vobscure.vo_reference`).
     reference_seed : int
         Seed of every reference (shared by all configurations, so that a reference is
         computed once per scene and camera).
@@ -141,13 +141,14 @@ class SweepConfig:
     Examples
     --------
     >>> c = SweepConfig("crease", "line", 9, size=(32, 24), references="ao")
-    >>> c.size, c.references, c.label
-    ((32, 24), ('ao',), 'line 9')
+    >>> c.size, c.references, c.label, c.own_reference
+    ((32, 24), ('ao',), 'line:9', 'volumetric')
     """
 
     scene: str = "crease"
     method: str = "line"
     samples: int = 9
+    fetch: str | None = None
     radius: float | None = None
     size: tuple | None = None
     camera: object = None
@@ -158,18 +159,20 @@ class SweepConfig:
     repeats: int = 1
     references: tuple = ("screen",)
     rays: int = 256
-    reference_samples: int = 1024
+    volume_samples: int = 1024
+    screen_samples: int = 1024
     reference_seed: int = 0
     allow_open: bool = False
 
     def __post_init__(self):
-        from ..camera import Camera, _check_size
+        from ..camera import Camera, check_size
         from ..groundtruth import VO_FALLOFFS
 
         put = object.__setattr__
         put(self, "scene", _scene_spec(self.scene))
-        check_choice(self.method, "method", METHODS)
-        put(self, "samples", check_int(self.samples, "samples"))
+        config = _methods.Config(_methods.get(self.method).name, self.samples, fetch=self.fetch)
+        put(self, "samples", config.samples)
+        put(self, "fetch", config.fetch)
         if self.radius is not None:
             put(self, "radius", check_positive(self.radius, "radius"))
         camera = self.camera
@@ -178,7 +181,7 @@ class SweepConfig:
         if camera is not None and not isinstance(camera, Camera):
             raise ValueError(f"camera must be a vobscure Camera, a Camera.to_dict() mapping or None, "
                              f"got {type(camera).__name__}")
-        size = None if self.size is None else _check_size(self.size)
+        size = None if self.size is None else check_size(self.size)
         if camera is not None and size is not None and size != camera.size:
             camera = camera.with_size(size)
         put(self, "camera", camera)
@@ -188,7 +191,7 @@ class SweepConfig:
             put(self, "thickness", check_positive(self.thickness, "thickness"))
         check_choice(self.falloff, "falloff", VO_FALLOFFS)
         put(self, "seed", check_int(self.seed, "seed", minimum=0))
-        put(self, "repeats", check_int(self.repeats, "repeats"))
+        put(self, "repeats", check_int(self.repeats, "repeats", minimum=0))
         refs = (self.references,) if isinstance(self.references, str) else tuple(self.references)
         for r in refs:
             check_choice(r, "references", REFERENCES)
@@ -196,21 +199,43 @@ class SweepConfig:
             raise ValueError(f"references must not repeat a name, got {refs}")
         put(self, "references", refs)
         put(self, "rays", check_int(self.rays, "rays", minimum=2))
-        put(self, "reference_samples", check_int(self.reference_samples, "reference_samples", minimum=2))
+        put(self, "volume_samples", check_int(self.volume_samples, "volume_samples", minimum=2))
+        put(self, "screen_samples", check_int(self.screen_samples, "screen_samples", minimum=2))
         put(self, "reference_seed", check_int(self.reference_seed, "reference_seed", minimum=0))
         put(self, "allow_open", _check_bool(self.allow_open, "allow_open"))
 
     @property
+    def method_config(self) -> _methods.Config:
+        """The registry configuration (method, samples, fetch)."""
+        return _methods.Config(self.method, self.samples, fetch=self.fetch)
+
+    @property
     def label(self) -> str:
-        """``"<method> <samples>"``, e.g. ``"line 9"``."""
-        return f"{self.method} {self.samples}"
+        """``"<method>:<samples>[:<fetch>]"``, e.g. ``"line:9"``."""
+        return self.method_config.label
+
+    @property
+    def quantity(self) -> str:
+        """What the method estimates with this ``normal_clamp`` (:data:`vobscure.methods.QUANTITIES`)."""
+        return self.method_config.quantity(self.normal_clamp)
+
+    @property
+    def own_reference(self) -> str:
+        """The reference of the method's own quantity (others measure model error)."""
+        return self.method_config.reference(self.normal_clamp)
+
+    @property
+    def scene_name(self) -> str:
+        """The scene's name or path; ``"custom"`` for a Scene object."""
+        return self.scene if isinstance(self.scene, str) else "custom"
 
     @property
     def view_key(self) -> str:
         """The scene and camera (or size) as one string: configurations that share it share a
         G-buffer and references."""
         cam = self.camera.to_dict() if self.camera is not None else {"size": list(self.size)}
-        return json.dumps([self.scene, cam], sort_keys=True)
+        scene = self.scene if isinstance(self.scene, str) else f"<Scene at {id(self.scene):#x}>"
+        return json.dumps([scene, cam], sort_keys=True)
 
 
 def _check_bool(value, name: str) -> bool:
@@ -232,13 +257,16 @@ class SweepResult:
         The camera used (``Camera.to_dict()``).
     seconds : float
         Median wall-clock seconds of one estimator call over ``config.repeats`` timed runs
-        (after one untimed warm-up call, which gives the image measured).
+        (after one untimed warm-up call, which gives the image measured); NaN when
+        ``repeats`` is 0.
     seconds_runs : tuple of float
         Every timed run.
+    cpu_seconds : float
+        Median process (CPU) seconds of the timed runs, over all threads.
     taps_per_pixel : int
-        Depth-buffer taps per pixel (the machine-independent cost).
+        Depth-buffer taps per pixel (the machine-independent cost, from the method registry).
     texels_per_pixel : int
-        Depth texels those taps read (see :data:`TEXELS_PER_TAP`).
+        Depth texels those taps read (:data:`vobscure.methods.TEXELS_PER_TAP`).
     pixels : int
         Covered (non-background) pixels of the G-buffer.
     errors : dict of str to ErrorReport
@@ -246,8 +274,15 @@ class SweepResult:
     decomposition : dict or None
         :meth:`vobscure.metrics.Decomposition.as_dict` when ``screen`` and ``volumetric``
         were requested (against ``ao`` when that was requested too).
+    cache_hits : dict of str to bool
+        Whether each reference came from the disk cache.
     image : (H, W) ndarray or None
         The estimate, when :func:`sweep` was asked to keep images.
+    references : dict of str to Estimate, or None
+        The reference estimates (value and stderr), when asked to keep images.
+    gbuffer : GBuffer or None
+        The G-buffer, when asked to keep images and the task ran in this process (a G-buffer
+        is not sent between processes: it is dropped when the result is pickled).
     """
 
     config: SweepConfig
@@ -255,12 +290,19 @@ class SweepResult:
     camera: dict
     seconds: float
     seconds_runs: tuple
+    cpu_seconds: float
     taps_per_pixel: int
     texels_per_pixel: int
     pixels: int
     errors: dict = field(default_factory=dict)
     decomposition: dict | None = None
+    cache_hits: dict = field(default_factory=dict)
     image: np.ndarray | None = None
+    references: dict | None = None
+    gbuffer: object = None
+
+    def __getstate__(self):
+        return {**self.__dict__, "gbuffer": None}
 
     def as_row(self) -> dict:
         """A flat record for tables: the configuration, the costs, ``<stat>_<reference>`` for
@@ -268,12 +310,13 @@ class SweepResult:
         ``<term>_<stat>`` columns (with ``decomposition_target``)."""
         c = self.config
         row = {
-            "scene": c.scene, "width": c.size[0], "height": c.size[1], "method": c.method,
-            "samples": c.samples, "radius": self.radius, "normal_clamp": c.normal_clamp,
-            "thickness": c.thickness, "falloff": c.falloff, "seed": c.seed, "repeats": c.repeats,
-            "seconds": self.seconds, "seconds_runs": " ".join(repr(s) for s in self.seconds_runs),
+            "scene": c.scene_name, "width": c.size[0], "height": c.size[1], "method": c.method,
+            "samples": c.samples, "fetch": c.method_config.fetch_used, "radius": self.radius,
+            "normal_clamp": c.normal_clamp, "thickness": c.thickness, "falloff": c.falloff, "seed": c.seed,
+            "repeats": c.repeats, "seconds": self.seconds,
+            "seconds_runs": " ".join(repr(s) for s in self.seconds_runs), "cpu_seconds": self.cpu_seconds,
             "taps_per_pixel": self.taps_per_pixel, "texels_per_pixel": self.texels_per_pixel,
-            "pixels": self.pixels,
+            "pixels": self.pixels, "quantity": c.quantity, "own_reference": c.own_reference,
         }
         for ref in sorted(c.references, key=REFERENCES.index):
             report = self.errors[ref].as_dict()
@@ -284,8 +327,9 @@ class SweepResult:
                 if key not in ("pixels", "ignored", "target"):
                     row[key] = value
             row["decomposition_target"] = self.decomposition["target"]
-        row.update(references=" ".join(c.references), rays=c.rays, reference_samples=c.reference_samples,
-                   reference_seed=c.reference_seed, camera=json.dumps(self.camera, sort_keys=True))
+        row.update(references=" ".join(c.references), rays=c.rays, volume_samples=c.volume_samples,
+                   screen_samples=c.screen_samples, reference_seed=c.reference_seed,
+                   camera=json.dumps(self.camera, sort_keys=True))
         return row
 
 
@@ -326,106 +370,110 @@ class _Memo:
 _MEMO = _Memo(MEMO_ENTRIES)
 
 
-def _stamp(spec: str):
-    """What identifies a scene's content cheaply: None for a built-in, (mtime, size) of a file."""
+def _stamp(spec):
+    """What identifies a scene's content cheaply: None for a built-in or a Scene object (its
+    identity is in the view key), (mtime, size) of a file."""
     from ..scenes import names
 
-    if spec in names():
+    if not isinstance(spec, str) or spec in names():
         return None
     st = os.stat(spec)
     return (st.st_mtime_ns, st.st_size)
 
 
-def _view(config: SweepConfig):
-    """(scene, camera, G-buffer) of the configuration, made once per worker."""
+def view(config: SweepConfig):
+    """(scene, camera, G-buffer) of a configuration, made once per worker process and kept
+    while the sweep runs."""
     from ..gbuffer import render_gbuffer
-    from ..scenes import get, load, names
+    from ..scenes import resolve
 
     stamp = _stamp(config.scene)
 
-    def make_scene():
-        return get(config.scene) if config.scene in names() else load(config.scene)
-
     def make_view():
-        scene = _MEMO.get(("scene", config.scene, stamp), make_scene)
+        scene = _MEMO.get(("scene", config.view_key if not isinstance(config.scene, str) else config.scene, stamp),
+                          lambda: resolve(config.scene)[0])
         camera = config.camera if config.camera is not None else scene.camera(config.size)
-        gb = render_gbuffer(scene, camera)
-        return scene, camera, gb
+        return scene, camera, render_gbuffer(scene, camera)
 
     return _MEMO.get(("view", config.view_key, stamp), make_view)
 
 
-def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache) -> np.ndarray:
-    """The (H, W) reference ``name`` of the configuration's view, made once per worker."""
+def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache):
+    """(Estimate, cache hit) of the reference ``name`` of the configuration's view, made once
+    per worker."""
     from .cache import ground_truth_cached, screen_reference_cached
 
     seed = config.reference_seed
     if name == "screen":
-        params = dict(radius=radius, samples=config.reference_samples, normal_clamp=config.normal_clamp,
+        params = dict(radius=radius, samples=config.screen_samples, normal_clamp=config.normal_clamp,
                       thickness=config.thickness, falloff=config.falloff, seed=seed)
 
         def make():
-            return screen_reference_cached(gb, scene, cache=cache, **params)[0].value
+            return screen_reference_cached(gb, scene, cache=cache, **params)
     else:
-        params = dict(quantity=name, radius=radius, rays=config.rays, samples=config.rays, seed=seed)
+        params = dict(quantity=name, radius=radius, seed=seed)
         if name == "volumetric":
-            params.update(falloff=config.falloff, normal_clamp=config.normal_clamp,
-                          allow_open=config.allow_open)
+            params.update(samples=config.volume_samples, falloff=config.falloff,
+                          normal_clamp=config.normal_clamp, allow_open=config.allow_open)
+        else:
+            params.update(rays=config.rays)
 
         def make():
-            return ground_truth_cached(scene, gb, cache=cache, progress=False, **params)[0].value
+            return ground_truth_cached(scene, gb, cache=cache, progress=False, **params)
 
     key = ("reference", config.view_key, _stamp(config.scene), name, json.dumps(params, sort_keys=True))
     return _MEMO.get(key, make)
 
 
-def _estimator(config: SweepConfig):
-    from .. import screenspace
-
-    return {"point": screenspace.vo_point, "line": screenspace.vo_line, "area": screenspace.vo_area,
-            "reference": _reference_value}[config.method]
-
-
-def _reference_value(gbuffer, **kwargs) -> np.ndarray:
-    from .. import screenspace
-
-    return screenspace.vo_reference(gbuffer, **kwargs).value
-
-
-def _taps(config: SweepConfig) -> int:
-    if config.method == "reference":
-        from ..estimate import DEFAULT_GROUPS   # vo_reference: antithetic pairs in every group
-        return 2 * DEFAULT_GROUPS * -(-config.samples // (2 * DEFAULT_GROUPS))
-    return config.samples
-
-
 def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
     """One task of :func:`sweep` (top level, so that any executor can pickle it)."""
     from ..metrics import decompose, error
+    from .common import time_calls
 
-    scene, camera, gb = _view(config)
-    radius = config.radius if config.radius is not None else RADIUS_FRACTION * scene.extent
-    refs = {name: _reference(name, config, scene, gb, radius, cache) for name in config.references}
-    fn = _estimator(config)
-    kwargs = dict(radius=radius, samples=config.samples, normal_clamp=config.normal_clamp,
-                  thickness=config.thickness, falloff=config.falloff, seed=config.seed)
-    image = fn(gb, **kwargs)   # warm-up (sample patterns are built and kept on the first call)
-    runs = []
-    for _ in range(config.repeats):
-        t0 = time.perf_counter()
-        fn(gb, **kwargs)
-        runs.append(time.perf_counter() - t0)
-    errors = {name: error(image, ref) for name, ref in refs.items()}
+    scene, camera, gb = view(config)
+    radius = config.radius if config.radius is not None else default_radius(scene)
+    made = {name: _reference(name, config, scene, gb, radius, cache) for name in config.references}
+    refs = {name: est for name, (est, _) in made.items()}
+    mc = config.method_config
+    kwargs = dict(radius=radius, normal_clamp=config.normal_clamp, thickness=config.thickness,
+                  falloff=config.falloff, seed=config.seed)
+    timings, values = time_calls({"run": lambda: mc.run(gb, **kwargs)}, config.repeats)
+    image = values["run"]
+    image = getattr(image, "value", image)      # a Monte Carlo method returns an Estimate
+    runs = timings["run"].runs
+    errors = {name: error(image, ref.value) for name, ref in refs.items()}
     decomposition = None
     if "screen" in refs and "volumetric" in refs:
-        decomposition = decompose(image, refs["screen"], refs["volumetric"], ao=refs.get("ao"),
-                                  obscurance=refs.get("obscurance")).as_dict()
-    taps = _taps(config)
+        decomposition = decompose(image, refs["screen"].value, refs["volumetric"].value,
+                                  ao=refs["ao"].value if "ao" in refs else None,
+                                  obscurance=refs["obscurance"].value if "obscurance" in refs else None).as_dict()
+    nan = float("nan")
     return SweepResult(config=config, radius=float(radius), camera=camera.to_dict(),
-                       seconds=float(np.median(runs)), seconds_runs=tuple(runs), taps_per_pixel=taps,
-                       texels_per_pixel=taps * TEXELS_PER_TAP[FETCH[config.method]],
-                       pixels=int(gb.valid.sum()), errors=errors, decomposition=decomposition,
-                       image=image if keep_image else None)
+                       seconds=timings["run"].median if runs else nan, seconds_runs=runs,
+                       cpu_seconds=timings["run"].cpu_median if runs else nan, taps_per_pixel=mc.taps,
+                       texels_per_pixel=mc.texels, pixels=int(gb.valid.sum()), errors=errors,
+                       decomposition=decomposition, cache_hits={n: bool(h) for n, (_, h) in made.items()},
+                       image=image if keep_image else None, references=refs if keep_image else None,
+                       gbuffer=gb if keep_image else None)
+
+
+class InlineExecutor(Executor):
+    """Runs every task at once in the calling thread, one after another: the executor for
+    timings that must not share the machine with other tasks (``vobscure compare``).
+
+    Examples
+    --------
+    >>> InlineExecutor().submit(pow, 2, 10).result()
+    1024
+    """
+
+    def submit(self, fn, /, *args, **kwargs):
+        future = Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:
+            future.set_exception(exc)
+        return future
 
 
 # ----------------------------------------------------------------------------- driver
@@ -499,7 +547,7 @@ def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, p
     try:
         for i in order:
             futures[executor.submit(_run_config, configs[i], cache, keep_images)] = i
-        with tqdm(total=len(configs), desc="sweep", unit="config", disable=not progress) as bar:
+        with progress_bar(len(configs), "sweep", progress) as bar:
             for future in as_completed(futures):
                 i = futures[future]
                 try:
@@ -519,10 +567,10 @@ def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, p
 
 
 # ----------------------------------------------------------------------------- writers
-_COLUMNS_HEAD = ("scene", "width", "height", "method", "samples", "radius", "normal_clamp", "thickness",
-                 "falloff", "seed", "repeats", "seconds", "seconds_runs", "taps_per_pixel",
-                 "texels_per_pixel", "pixels")
-_COLUMNS_TAIL = ("references", "rays", "reference_samples", "reference_seed", "camera")
+_COLUMNS_HEAD = ("scene", "width", "height", "method", "samples", "fetch", "radius", "normal_clamp",
+                 "thickness", "falloff", "seed", "repeats", "seconds", "seconds_runs", "cpu_seconds",
+                 "taps_per_pixel", "texels_per_pixel", "pixels", "quantity", "own_reference")
+_COLUMNS_TAIL = ("references", "rays", "volume_samples", "screen_samples", "reference_seed", "camera")
 
 
 def _rows(results) -> tuple[list[dict], list[str]]:
@@ -534,7 +582,7 @@ def _rows(results) -> tuple[list[dict], list[str]]:
     # the order of as_row, with every reference's and the decomposition's columns in place
     # even when the first rows lack them
     present = {k for row in rows for k in row}
-    canonical = [k for k in _COLUMNS_HEAD]
+    canonical = list(_COLUMNS_HEAD)
     canonical += [f"{stat}_{ref}" for ref in REFERENCES for stat in ERROR_STATS]
     canonical += [f"{term}_{stat}" for term in DECOMPOSITION_TERMS for stat in ("rmse", "bias", "mae")]
     canonical += ["decomposition_target", *_COLUMNS_TAIL]
@@ -544,34 +592,14 @@ def _rows(results) -> tuple[list[dict], list[str]]:
     return rows, columns
 
 
-def results_to_csv(results, path) -> Path:
+def results_to_csv(results, path):
     """Write the results as CSV (one row per configuration, :meth:`SweepResult.as_row`),
     atomically. Columns are the union over the rows (a reference one row did not ask for is
-    left empty); floats are written exactly (``repr``). Returns the path."""
+    left empty); floats are written exactly (``repr``), booleans as 0 / 1. Returns the path."""
+    from .common import write_csv
+
     rows, columns = _rows(results)
-    buf = io.StringIO(newline="")
-    writer = csv.DictWriter(buf, fieldnames=columns, restval="", lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({k: ("" if v is None else v) for k, v in row.items()})
-    text = buf.getvalue().encode()
-    return atomic_write(path, lambda fh: fh.write(text))
-
-
-def _cell(value) -> str:
-    if value is None:
-        return "none"
-    if isinstance(value, str) and value == "":
-        return ""
-    if isinstance(value, (bool, np.bool_)):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "nan"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return f"{value:.4g}"
-    return str(value).replace("|", "\\|")
+    return write_csv(path, rows, columns)
 
 
 def results_to_markdown(results, path=None) -> str:
@@ -586,26 +614,24 @@ def results_to_markdown(results, path=None) -> str:
     (no results)
     <BLANKLINE>
     """
+    from .common import cell, markdown_table
+
     rows, columns = _rows(results)
     if not rows:
         text = "(no results)\n"
     else:
         skip = {"seconds_runs", "camera"}
         common = [k for k in columns if k not in skip and len(rows) > 1
-                  and all(k in r for r in rows) and len({_cell(r[k]) for r in rows}) == 1]
+                  and all(k in r for r in rows) and len({cell(r[k]) for r in rows}) == 1]
         shown = [k for k in columns if k not in skip and k not in common]
         lines = []
         if common:
-            lines.append("Common settings: " + ", ".join(f"{k} = {_cell(rows[0][k])}" for k in common) + ".")
+            lines.append("Common settings: " + ", ".join(f"{k} = {cell(rows[0][k]) or 'none'}" for k in common) + ".")
             lines.append("")
-        lines.append("| " + " | ".join(shown) + " |")
-        lines.append("|" + "|".join("---" for _ in shown) + "|")
-        for r in rows:
-            lines.append("| " + " | ".join(_cell(r[k]) if k in r else "" for k in shown) + " |")
+        lines.append(markdown_table(rows, shown))
         text = "\n".join(lines) + "\n"
     if path is not None:
-        data = text.encode()
-        atomic_write(path, lambda fh: fh.write(data))
+        write_text(path, text)
     return text
 
 

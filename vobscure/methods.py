@@ -1,0 +1,323 @@
+"""The registry of estimators: every method the experiments can run, in one place.
+
+Each entry (:class:`Method`) says what a method is and what it costs:
+
+- the function and the keyword that counts its samples (``samples`` for the VO estimators);
+- its default depth fetch and how many depth texels one tap of that fetch reads;
+- ``taps(n)``, the depth-buffer taps per pixel it makes with ``n`` samples, and
+  ``texels(n)``, the texels those taps read (the cost model of DESIGN.md);
+- the quantity it estimates (:data:`QUANTITIES`: ball VO, half-ball VO, cosine AO,
+  obscurance) and so the reference it is compared with.
+
+``vobscure compare``, :func:`vobscure.experiments.sweep`, the claims of Loos & Sloan, the
+figures and the benchmarks read it; ``vobscure compare --help`` lists it. Adding an estimator
+is one function plus one :func:`register` call (``docs/screenspace.md``, "Adding an
+estimator"). A configuration -- a method with a sample count and, optionally, another fetch
+-- is a :class:`Config`, written ``NAME:SAMPLES[:FETCH]`` (``line:9``, ``point:12:nearest``).
+
+Examples
+--------
+>>> from vobscure import methods
+>>> methods.names()
+('point', 'line', 'area', 'reference')
+>>> m = methods.get("point")
+>>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
+(32, 128, 'half-ball VO', 'volumetric')
+>>> [c.label for c in methods.parse("line:9, point:12:nearest")]
+['line:9', 'point:12:nearest']
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from .screenspace import point_taps, vo_area, vo_line, vo_point, vo_reference
+
+__all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
+           "parse", "unregister"]
+
+#: Depth texels one tap reads with each fetch: a nearest fetch reads one texel, a bilinear
+#: fetch 2 x 2; ``vo_area``'s mip-map lookup reads two levels of 2 x 2 (trilinear) or 3 x 3
+#: (its default quadratic B-spline) texels.
+TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18}
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A quantity an estimator estimates, and the reference (``ground_truth`` quantity) that
+    measures it.
+
+    Attributes
+    ----------
+    name : str
+        Human-readable name, e.g. ``"half-ball VO"``.
+    reference : str
+        The reference of :mod:`vobscure.experiments.compare` that computes it exactly:
+        ``"volumetric"`` (world-space VO, with ``normal_clamp`` as given), ``"ao"`` (cosine AO
+        within the radius) or ``"obscurance"``.
+    normal_clamp : bool or None
+        The ``normal_clamp`` of the reference (None: not applicable).
+    screen_limit : bool
+        Whether :func:`vobscure.vo_reference` (the converged screen-space VO) is the
+        estimator's limit with infinitely many samples, so that its error against it is the
+        sampling error alone.
+    """
+
+    name: str
+    reference: str
+    normal_clamp: bool | None = None
+    screen_limit: bool = False
+
+
+#: The quantities, by name.
+QUANTITIES = {
+    "ball VO": Quantity("ball VO", "volumetric", normal_clamp=False, screen_limit=True),
+    "half-ball VO": Quantity("half-ball VO", "volumetric", normal_clamp=True, screen_limit=True),
+    "cosine AO": Quantity("cosine AO", "ao"),
+    "obscurance": Quantity("obscurance", "obscurance"),
+}
+
+
+def _vo_quantity(normal_clamp: bool = False) -> str:
+    """The VO estimators estimate the ball's VO, or the half-ball's with the normal clamp."""
+    return "half-ball VO" if normal_clamp else "ball VO"
+
+
+def _one_tap_per_sample(n: int) -> int:
+    return int(n)
+
+
+def _antithetic_pairs(n: int) -> int:
+    """vo_reference rounds its samples up to antithetic pairs."""
+    return 2 * -(-int(n) // 2)
+
+
+@dataclass(frozen=True)
+class Method:
+    """One registered estimator.
+
+    Parameters
+    ----------
+    name : str
+        Registry key, as written in ``--methods`` (``"line"``).
+    function : callable
+        ``function(gbuffer, *, radius, <samples>=n, normal_clamp, thickness, seed, ...)``
+        returning an (H, W) visibility image (or an :class:`~vobscure.Estimate`).
+    default_samples : int
+        The sample count of a configuration that gives none.
+    fetch : str
+        The default fetch (a key of :data:`TEXELS_PER_TAP`).
+    taps : callable
+        ``taps(n) -> int``: depth-buffer taps per pixel with ``n`` samples.
+    quantity : callable
+        ``quantity(normal_clamp) -> str``: a key of :data:`QUANTITIES`.
+    samples : str
+        The keyword of ``function`` that counts samples.
+    fetch_parameter : str or None
+        The keyword of ``function`` that selects the fetch (None: fixed).
+    summary : str
+        One line for ``--help`` and the docs.
+    reference_only : bool
+        A converged reference rather than an estimator one would ship (left out of the
+        default comparisons and of the verdict's choices).
+
+    Examples
+    --------
+    >>> line = get("line")
+    >>> line.taps(9), line.texels(9), line.fetch
+    (9, 9, 'nearest')
+    """
+
+    name: str
+    function: Callable
+    default_samples: int
+    fetch: str
+    taps: Callable[[int], int] = _one_tap_per_sample
+    quantity: Callable[..., str] = _vo_quantity
+    samples: str = "samples"
+    fetch_parameter: str | None = "fetch"
+    summary: str = ""
+    reference_only: bool = False
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.isidentifier():
+            raise ValueError(f"Method name must be an identifier such as 'line', got {self.name!r}")
+        if not callable(self.function):
+            raise ValueError(f"Method {self.name!r}: function must be callable, got {self.function!r}")
+        if self.fetch not in TEXELS_PER_TAP:
+            raise ValueError(f"Method {self.name!r}: fetch must be one of {', '.join(TEXELS_PER_TAP)}, "
+                             f"got {self.fetch!r}")
+
+    def texels(self, n: int, fetch: str | None = None) -> int:
+        """Depth texels read per pixel with ``n`` samples: ``taps(n)`` x texels per tap of
+        ``fetch`` (default the method's own)."""
+        return self.taps(n) * TEXELS_PER_TAP[fetch or self.fetch]
+
+    def reference(self, normal_clamp: bool = False) -> str:
+        """The reference the method's estimate is scored against (its own quantity's)."""
+        return QUANTITIES[self.quantity(normal_clamp)].reference
+
+    def run(self, gbuffer, samples: int | None = None, *, fetch: str | None = None, **kwargs):
+        """Call the function with ``samples`` (default :attr:`default_samples`) and, when
+        given, another ``fetch``; other keywords are passed on."""
+        kwargs[self.samples] = self.default_samples if samples is None else samples
+        if fetch is not None:
+            if self.fetch_parameter is None:
+                raise ValueError(f"method {self.name!r} has a fixed fetch; got fetch={fetch!r}")
+            kwargs[self.fetch_parameter] = fetch
+        return self.function(gbuffer, **kwargs)
+
+
+_REGISTRY: dict[str, Method] = {}
+
+
+def register(method: Method, *, replace: bool = False) -> Method:
+    """Add ``method`` to the registry (``replace=True`` to redefine a name); returns it."""
+    if not isinstance(method, Method):
+        raise ValueError(f"register() takes a vobscure.methods.Method, got {type(method).__name__}")
+    if method.name in _REGISTRY and not replace:
+        raise ValueError(f"a method named {method.name!r} is already registered (pass replace=True)")
+    _REGISTRY[method.name] = method
+    return method
+
+
+def unregister(name: str) -> None:
+    """Remove a method (for tests and experiments that register their own)."""
+    get(name)
+    del _REGISTRY[name]
+
+
+def names(*, include_references: bool = True) -> tuple[str, ...]:
+    """The registered method names, in registration order."""
+    return tuple(n for n, m in _REGISTRY.items() if include_references or not m.reference_only)
+
+
+def get(name: str) -> Method:
+    """The method registered as ``name``; the error lists the valid names."""
+    try:
+        return _REGISTRY[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown method {name!r}; expected one of {', '.join(_REGISTRY)}") from None
+
+
+def describe() -> str:
+    """One line per registered method, for ``--help`` and error messages."""
+    lines = []
+    for m in _REGISTRY.values():
+        lines.append(f"{m.name} (default {m.default_samples} samples, {m.fetch} fetch): {m.summary}")
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class Config:
+    """A method with a sample count (and optionally another fetch): ``line:9``,
+    ``point:12:nearest``.
+
+    Examples
+    --------
+    >>> c = Config("point", 33, fetch="nearest")
+    >>> c.label, c.taps, c.texels, c.quantity(False)
+    ('point:33:nearest', 32, 32, 'ball VO')
+    """
+
+    method: str
+    samples: int
+    fetch: str | None = None
+
+    def __post_init__(self):
+        from ._validate import check_int
+
+        m = get(self.method)
+        object.__setattr__(self, "samples", check_int(self.samples, "samples"))
+        if self.fetch is not None:
+            if m.fetch_parameter is None or self.fetch not in TEXELS_PER_TAP:
+                raise ValueError(f"fetch of {self.method!r} must be None or one of "
+                                 f"{', '.join(TEXELS_PER_TAP)}, got {self.fetch!r}")
+            if self.fetch == m.fetch:
+                object.__setattr__(self, "fetch", None)
+
+    @property
+    def spec(self) -> Method:
+        """The registry entry."""
+        return get(self.method)
+
+    @property
+    def label(self) -> str:
+        base = f"{self.method}:{self.samples}"
+        return base if self.fetch is None else f"{base}:{self.fetch}"
+
+    @property
+    def fetch_used(self) -> str:
+        return self.fetch or self.spec.fetch
+
+    @property
+    def taps(self) -> int:
+        return self.spec.taps(self.samples)
+
+    @property
+    def texels(self) -> int:
+        return self.spec.texels(self.samples, self.fetch_used)
+
+    def quantity(self, normal_clamp: bool = False) -> str:
+        return self.spec.quantity(normal_clamp)
+
+    def reference(self, normal_clamp: bool = False) -> str:
+        return self.spec.reference(normal_clamp)
+
+    def run(self, gbuffer, **kwargs):
+        """Run the estimator on ``gbuffer`` with this configuration's samples and fetch."""
+        return self.spec.run(gbuffer, self.samples, fetch=self.fetch, **kwargs)
+
+
+def parse(spec) -> tuple[Config, ...]:
+    """``"point:12,line:5"`` (or a sequence of such strings, Configs, or (name, samples)
+    pairs) -> Configs. ``NAME`` alone takes the method's default sample count.
+
+    Examples
+    --------
+    >>> [c.label for c in parse("point:12, line, area:1")]
+    ['point:12', 'line:9', 'area:1']
+    >>> parse("ray:3")
+    Traceback (most recent call last):
+    ...
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference
+    """
+    items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
+    if not items:
+        raise ValueError(f"--methods must name at least one method, e.g. 'line:9,point:12'; "
+                         f"methods: {', '.join(_REGISTRY)}")
+    out = []
+    for item in items:
+        if isinstance(item, Config):
+            out.append(item)
+            continue
+        if isinstance(item, tuple):
+            out.append(Config(*item))
+            continue
+        name, _, rest = str(item).partition(":")
+        name = name.strip()
+        if name not in _REGISTRY:
+            raise ValueError(f"--methods entry {item!r}: unknown method {name!r}; expected one of "
+                             f"{', '.join(_REGISTRY)}")
+        count, _, fetch = rest.partition(":")
+        count = count.strip()
+        if count and not count.isdigit():
+            raise ValueError(f"--methods entry {item!r} must be NAME[:SAMPLES[:FETCH]] with SAMPLES a "
+                             f"positive integer, e.g. 'line:9' or 'point:12:nearest'")
+        samples = int(count) if count else _REGISTRY[name].default_samples
+        out.append(Config(name, samples, fetch=fetch.strip() or None))
+    if len(set(out)) != len(out):
+        raise ValueError(f"--methods lists a configuration twice: {', '.join(c.label for c in out)}")
+    return tuple(out)
+
+
+# --------------------------------------------------------------------------- the registry
+register(Method("point", vo_point, default_samples=12, fetch="bilinear", taps=point_taps,
+                summary="point sampling of the ball (Loos & Sloan 2010, Sec. 4)"))
+register(Method("line", vo_line, default_samples=9, fetch="nearest",
+                summary="line sampling: exact chords through the ball (Sec. 4.1)"))
+register(Method("area", vo_area, default_samples=1, fetch="bspline", fetch_parameter="reconstruction",
+                summary="area sampling with mip-mapped depth moments (Sec. 4.2)"))
+register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_antithetic_pairs,
+                summary="the converged screen-space VO (dense stratified points)", reference_only=True))
