@@ -11,6 +11,9 @@ import pytest
 from scipy import integrate, stats
 
 from vobscure import patterns as P
+from vobscure.patterns import generators as G
+from vobscure.patterns import metric as M
+from vobscure.patterns import precomputed as T
 from vobscure.patterns import SamplePattern, ball, cap_volume, crease_volume, disk, quality
 
 from conftest import FALSE_FAILURE
@@ -95,7 +98,7 @@ def test_crease_volume_against_quadrature():
     (the inner one told where the integrand has kinks)."""
     rng = np.random.default_rng(3)
     for _ in range(3):
-        n1, n2 = P._hemisphere(rng, 1)[0], P._hemisphere(rng, 1)[0]
+        n1, n2 = M._hemisphere(rng, 1)[0], M._hemisphere(rng, 1)[0]
         t1, t2 = rng.uniform(-0.6, 0.6, 2)
 
         def along(phi):
@@ -136,9 +139,9 @@ def test_crease_volume_against_monte_carlo():
 # --- the quality metric ----------------------------------------------------------------------
 
 def test_quality_estimates_agree_with_the_exact_values_for_dense_patterns():
-    g2 = P._grid(2, 60)
+    g2 = P.grid_cells(2, 60)
     dense_disk = SamplePattern(g2, 2 * np.sqrt(1 - np.sum(g2 * g2, axis=1)))
-    g3 = P._grid(3, 20)
+    g3 = P.grid_cells(3, 20)
     dense_ball = SamplePattern(g3, np.ones(len(g3)))
     for family in P.FAMILIES:
         assert quality(dense_disk, trials=500, family=family).value < DENSE_TOL[2], family
@@ -146,18 +149,18 @@ def test_quality_estimates_agree_with_the_exact_values_for_dense_patterns():
 
 
 def test_symmetric_patterns_are_exact_on_planes_through_the_centre():
-    cfg = P._configurations(512, 0, "cap")
+    cfg = M._configurations(512, 0, "cap")
     through = dataclasses.replace(cfg, t1=np.zeros(512), exact=np.full(512, 0.5))
     for p in (disk(9), disk(12), ball(12), ball(40), disk(7, method="sobol", seed=3)):
-        np.testing.assert_allclose(P._estimates(p, through), 0.5, atol=EXACT_TOL)
+        np.testing.assert_allclose(M._estimates(p, through), 0.5, atol=EXACT_TOL)
     # a point sample at the centre lies on the surface and counts half open, as in vo_point
     # (docs/screenspace.md, "The centre sample"): odd symmetric ball patterns are exact too
     # (before the rule they read 0.5 + w_centre / 2)
     for odd in (ball(13), ball(33), ball(13, method="sobol"), ball(33, method="lloyd")):
         assert odd.has_center and odd.weights[0] > 0.02
-        np.testing.assert_allclose(P._estimates(odd, through), 0.5, atol=EXACT_TOL)
+        np.testing.assert_allclose(M._estimates(odd, through), 0.5, atol=EXACT_TOL)
     plain = disk(9, method="random", symmetric=False, seed=3)
-    assert np.max(np.abs(P._estimates(plain, through) - 0.5)) > 0.01
+    assert np.max(np.abs(M._estimates(plain, through) - 0.5)) > 0.01
 
 
 def _crease_exact_near_centre(cfg, eps):
@@ -174,7 +177,7 @@ def test_the_centre_alone_reads_one_half_on_every_crease():
     stands for a small ball about the surface point, which every crease configuration cuts in
     half: the first plane passes through the centre, the second at |t2| > 0 from it."""
     centre = SamplePattern([[0.0, 0.0, 0.0]], [1.0])
-    cfg = P._configurations(P.QUALITY_TRIALS, P.QUALITY_SEED, "crease")
+    cfg = M._configurations(P.QUALITY_TRIALS, P.QUALITY_SEED, "crease")
     assert np.all(cfg.t1 == 0.0) and set(np.unique(cfg.kind)) == {1, 2}
     # where 1/2 is right: the second plane misses a ball of radius eps < |t2| about the
     # centre, whose exact VO is then 1/2 (to rounding) in every configuration
@@ -182,10 +185,10 @@ def test_the_centre_alone_reads_one_half_on_every_crease():
     for eps in (0.5 * np.abs(cfg.t2), np.full(len(cfg.t2), 1e-9)):
         small = np.abs(cfg.t2) > eps
         np.testing.assert_allclose(_crease_exact_near_centre(cfg, eps)[small], 0.5, atol=EXACT_TOL)
-    assert np.all(P._estimates(centre, cfg) == 0.5)
+    assert np.all(M._estimates(centre, cfg) == 0.5)
     # on the mixed family: 1/2 on the creases; on the caps (t1 != 0) an ordinary point test
-    mixed = P._configurations(P.QUALITY_TRIALS, P.QUALITY_SEED, "mixed")
-    est = P._estimates(centre, mixed)
+    mixed = M._configurations(P.QUALITY_TRIALS, P.QUALITY_SEED, "mixed")
+    est = M._estimates(centre, mixed)
     cap = mixed.kind == 0
     assert np.all(mixed.t1[cap] != 0.0)
     assert np.all(est[~cap] == 0.5)
@@ -215,24 +218,24 @@ def _split_centre_estimates(pattern, cfg, delta=1e-9):
 
 
 def test_odd_symmetric_ball_patterns_count_the_centre_half_open_when_the_plane_passes_through_it():
-    cfg = P._configurations(2000, 11, "crease")
+    cfg = M._configurations(2000, 11, "crease")
     assert np.min(np.abs(cfg.t2)) > 1e-6
-    planes = P._configurations(500, 12, "cap")
+    planes = M._configurations(500, 12, "cap")
     through = dataclasses.replace(planes, t1=np.zeros(500))
     for p in (ball(13), ball(33), ball(9, method="spiral"), ball(21, method="random"),
               ball(1, method="lloyd", symmetric=False), ball(12)):
         for c in (cfg, through):
-            np.testing.assert_allclose(P._estimates(p, c), _split_centre_estimates(p, c), rtol=0,
+            np.testing.assert_allclose(M._estimates(p, c), _split_centre_estimates(p, c), rtol=0,
                                        atol=EXACT_TOL)
     # the centre adds w0 / 2 where the first plane passes through it, and is an ordinary point
     # test elsewhere (caps off the centre: open when 0 <= t1)
     odd = ball(13)
     w0 = odd.weights[0]
     rest = SamplePattern(odd.points[1:], odd.weights[1:])
-    np.testing.assert_allclose(P._estimates(odd, cfg), (1 - w0) * P._estimates(rest, cfg) + w0 / 2,
+    np.testing.assert_allclose(M._estimates(odd, cfg), (1 - w0) * M._estimates(rest, cfg) + w0 / 2,
                                rtol=0, atol=EXACT_TOL)
     assert np.all(planes.t1 != 0.0)
-    np.testing.assert_allclose(P._estimates(odd, planes), (1 - w0) * P._estimates(rest, planes)
+    np.testing.assert_allclose(M._estimates(odd, planes), (1 - w0) * M._estimates(rest, planes)
                                + w0 * (planes.t1 >= 0.0), rtol=0, atol=EXACT_TOL)
 
 
@@ -333,16 +336,16 @@ def test_a_seed_no_table_has_is_generated():
 # --- tables ----------------------------------------------------------------------------------
 
 FAMILIES = [(domain, method, variant) for domain, dim in (("disk", 2), ("ball", 3))
-            for method in P.METHODS for variant in P.VARIANTS[dim]]
+            for method in P.METHODS for variant in T.VARIANTS[dim]]
 
 
 @pytest.mark.parametrize("domain,method,variant", FAMILIES)
 def test_tables_load_and_their_quality_is_reproduced(domain, method, variant):
     dim = 2 if domain == "disk" else 3
     table = P.load_table(domain, method, variant=variant)
-    assert sorted(table) == P._table_counts(dim, method, variant)
+    assert sorted(table) == T.table_counts(dim, method, variant)
     for n, p in table.items():
-        symmetric, center = P._variant_flags(variant, n)
+        symmetric, center = T.variant_flags(variant, n)
         _check_valid(p, n, dim, symmetric=symmetric, center=center)
     # the recorded quality is a fresh quality() evaluation with the recorded settings
     for n in (1, 2, 5, 9, 16, 33):
@@ -361,8 +364,8 @@ def _provenance_of(path):
 
 def test_ball_tables_record_the_quality_version_of_the_centre_rule():
     for method in P.METHODS:
-        for variant in P.VARIANTS[3]:
-            prov = _provenance_of(P._table_path(3, method, variant))
+        for variant in T.VARIANTS[3]:
+            prov = _provenance_of(T.table_path(3, method, variant))
             assert prov["quality"]["version"] == P.QUALITY_VERSION == 2, (method, variant)
             assert "centre" in prov["quality"]["note"]
             # the points are the generation's: its command stays, the re-evaluation is named
@@ -377,10 +380,10 @@ def test_rescoring_keeps_points_and_weights_bit_for_bit(tmp_path):
     shutil.copy(P.TABLE_DIR / name, tmp_path / name)
     before = P.load_table("ball", "sobol", directory=tmp_path)
     try:
-        assert P._rescore_tables(tmp_path, methods=("sobol",)) == [tmp_path / name]
+        assert T.rescore_tables(tmp_path, methods=("sobol",)) == [tmp_path / name]
         after = P.load_table("ball", "sobol", directory=tmp_path)
     finally:
-        P._read_table.cache_clear()
+        T.clear_caches()
     assert sorted(after) == sorted(before)
     for n in before:
         assert np.array_equal(after[n].points, before[n].points)
@@ -410,9 +413,7 @@ def test_a_quick_build_re_evaluates_the_entries_it_keeps_from_an_older_metric(tm
         P.build_tables(tmp_path, quick=True, methods=("random",), dims=(3,), progress=False)
         table = P.load_table("ball", "random", directory=tmp_path)
     finally:
-        P._cached.cache_clear()
-        P._read_table.cache_clear()
-        P._best.cache_clear()
+        T.clear_caches()
     assert np.array_equal(table[13].points, arrays["points"][arrays["offsets"][12]:arrays["offsets"][13]])
     assert table[13].provenance["quality"] == pytest.approx(float(quality(table[13]).value), rel=EXACT_TOL)
     assert _provenance_of(tmp_path / src.name)["quality"]["version"] == P.QUALITY_VERSION
@@ -436,10 +437,10 @@ TABLE_BUILD_DISABLED_SIMD = ("AVX512_SPR", "AVX512_ICL", "X86_V4")
 def test_table_entries_regenerate_deterministically_and_to_the_last_bits(dim, method, variant, n):
     """Same seed, same pattern: two fresh runs agree bit for bit here, and with the table to
     within a few units in the last place (the table may come from a CPU with other SIMD)."""
-    symmetric, center = P._variant_flags(variant, n)
-    stored = P.load_table(P._DOMAIN[dim], method, variant=variant)[n]
-    fresh = P._generate(dim, n, method, symmetric, center, 0)
-    again = P._generate(dim, n, method, symmetric, center, 0)
+    symmetric, center = T.variant_flags(variant, n)
+    stored = P.load_table(T.DOMAIN[dim], method, variant=variant)[n]
+    fresh = G.generate(dim, n, method, symmetric, center, 0)
+    again = G.generate(dim, n, method, symmetric, center, 0)
     assert np.array_equal(fresh.points, again.points) and np.array_equal(fresh.weights, again.weights)
     np.testing.assert_allclose(fresh.points, stored.points, rtol=0, atol=8 * np.finfo(float).eps)
     np.testing.assert_allclose(fresh.weights, stored.weights, rtol=0, atol=8 * np.finfo(float).eps)
@@ -460,12 +461,12 @@ def test_table_entries_regenerate_bit_for_bit_with_the_build_machines_simd():
     disable = [f for f in TABLE_BUILD_DISABLED_SIMD if features.get(f)]
     env = dict(os.environ, NPY_DISABLE_CPU_FEATURES=" ".join(disable))
     code = ("import json, sys, numpy as np\n"
-            "from vobscure import patterns as P\n"
+            "from vobscure.patterns import generators as G, precomputed as T\n"
             "out = []\n"
             "for dim, method, variant, n in json.loads(sys.argv[1]):\n"
-            "    s, c = P._variant_flags(variant, n)\n"
-            "    t = P.load_table(P._DOMAIN[dim], method, variant=variant)[n]\n"
-            "    f = P._generate(dim, n, method, s, c, 0)\n"
+            "    s, c = T.variant_flags(variant, n)\n"
+            "    t = T.load_table({2: 'disk', 3: 'ball'}[dim], method, variant=variant)[n]\n"
+            "    f = G.generate(dim, n, method, s, c, 0)\n"
             "    out.append(bool(np.array_equal(f.points, t.points) and np.array_equal(f.weights, t.weights)))\n"
             "print(json.dumps(out))\n")
     run = subprocess.run([sys.executable, "-c", code, json.dumps(REGENERATED)], env=env,
@@ -499,20 +500,17 @@ def test_missing_or_stale_tables_fall_back_to_generation(tmp_path, monkeypatch):
         table = P.load_table("disk", "random", variant="plain", directory=tmp_path)
         assert sorted(table) == [1, 2, 3, 4]
         assert np.array_equal(table[4].points, disk(4, method="random", symmetric=False).points)
-        monkeypatch.setattr(P, "TABLE_DIR", tmp_path)
-        P._cached.cache_clear()
-        P._best.cache_clear()
+        monkeypatch.setattr(T, "TABLE_DIR", tmp_path)
+        T.clear_caches()
         assert disk(4, method="random").provenance["source"] == "table disk_random_symmetric.npz"
         assert disk(4).method == "random"                  # the only table here
         assert disk(5, method="sobol").provenance["source"] == "generated"        # no such table
-        monkeypatch.setattr(P, "GENERATOR_VERSION", P.GENERATOR_VERSION + 1)
-        P._cached.cache_clear()
+        monkeypatch.setattr(G, "GENERATOR_VERSION", G.GENERATOR_VERSION + 1)
+        T.clear_caches()
         assert P.load_table("disk", "random", variant="plain", directory=tmp_path) == {}
         assert disk(4, method="random").provenance["source"] == "generated"       # stale table
     finally:
-        P._cached.cache_clear()
-        P._read_table.cache_clear()
-        P._best.cache_clear()
+        T.clear_caches()
 
 
 @pytest.mark.slow
@@ -597,3 +595,22 @@ def test_tables_are_package_data_reached_from_data_patterns():
     for f in files:
         assert any(fnmatch.fnmatch(f, g) for g in globs), f"{f} would be missing from a wheel"
     assert (root / "data" / "patterns").resolve() == P.TABLE_DIR
+
+
+def test_public_names_and_no_private_imports_between_modules():
+    """Every public name is importable from vobscure.patterns, the names other modules use are
+    there, and no module of the package imports a private name from another module."""
+    import ast
+    from pathlib import Path
+
+    for name in P.__all__:
+        assert hasattr(P, name), name
+    for name in ("DISK_GRID", "BALL_GRID", "GENERATOR_VERSION", "QUALITY_VERSION", "QUALITY_TRIALS", "QUALITY_SEED",
+                 "FAMILIES", "VARIANTS", "TABLE_EXTRA_N", "BEST_FALLBACK", "ELECTROSTATIC", "LLOYD", "POISSON"):
+        assert hasattr(P, name), name
+    root = Path(P.__file__).resolve().parents[1]
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level > 0 and "patterns" in (node.module or "") + str(path):
+                private = [a.name for a in node.names if a.name.startswith("_")]
+                assert not private, f"{path.relative_to(root)} imports {private} from {node.module}"

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from vobscure.sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, square_to_cosine_hemisphere,
-                               square_to_uniform_hemisphere, tangent_frame, to_world)
+from vobscure.sampling import (cube_to_uniform_ball, cube_to_uniform_half_ball, shifted_hemisphere_directions,
+                               square_to_cosine_hemisphere, square_to_uniform_disk, square_to_uniform_disk_concentric,
+                               square_to_uniform_half_disk, square_to_uniform_hemisphere, tangent_frame, to_world)
 
 #: KS-test false-failure rate per assertion
 ALPHA = 1e-4
@@ -31,6 +32,29 @@ def test_uniform_warps_distribution():
     assert stats.kstest(r ** 3, "uniform").pvalue > ALPHA  # uniform volume: r^3 uniform
     assert stats.kstest((x[:, 2] / r + 1) / 2, "uniform").pvalue > ALPHA
 
+
+
+@pytest.mark.parametrize("warp, half", [(square_to_uniform_disk, False), (square_to_uniform_half_disk, True),
+                                        (square_to_uniform_disk_concentric, False)])
+def test_disk_warps_distribution(warp, half):
+    x = warp(np.random.default_rng(3).random((20000, 2)))
+    r2 = np.sum(x * x, axis=1)
+    assert np.all(r2 <= 1.0 + 1e-12)
+    assert stats.kstest(r2, "uniform").pvalue > ALPHA  # uniform area: r^2 uniform
+    angle = np.arctan2(x[:, 1], x[:, 0])
+    if half:
+        assert np.all(x[:, 0] >= 0)
+        assert stats.kstest(angle / np.pi + 0.5, "uniform").pvalue > ALPHA
+    else:
+        assert stats.kstest(angle / (2 * np.pi) % 1, "uniform").pvalue > ALPHA
+
+
+def test_half_ball_warp_distribution():
+    x = cube_to_uniform_half_ball(np.random.default_rng(4).random((20000, 3)))
+    r = np.linalg.norm(x, axis=1)
+    assert np.all(x[:, 2] >= 0) and np.all(r <= 1.0 + 1e-12)
+    assert stats.kstest(r ** 3, "uniform").pvalue > ALPHA  # uniform volume: r^3 uniform
+    assert stats.kstest(x[:, 2] / r, "uniform").pvalue > ALPHA  # uniform over the hemisphere of directions
 
 def test_tangent_frame_orthonormal_right_handed():
     n = np.random.default_rng(2).normal(size=(1000, 3))

@@ -16,6 +16,10 @@ __all__ = [
     "square_to_cosine_hemisphere",
     "square_to_uniform_hemisphere",
     "cube_to_uniform_ball",
+    "cube_to_uniform_half_ball",
+    "square_to_uniform_disk",
+    "square_to_uniform_half_disk",
+    "square_to_uniform_disk_concentric",
     "tangent_frame",
     "to_world",
     "sobol_base",
@@ -49,6 +53,117 @@ def cube_to_uniform_ball(u: np.ndarray) -> np.ndarray:
     s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
     phi = 2.0 * np.pi * u[..., 2]
     return r[..., None] * np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+
+
+def cube_to_uniform_half_ball(u: np.ndarray) -> np.ndarray:
+    """(..., 3) uniform in [0, 1)^3 -> (..., 3) uniform in the half ball z >= 0 (volume preserving).
+
+    The polar map of :func:`cube_to_uniform_ball` with the direction from
+    :func:`square_to_uniform_hemisphere`: radius cbrt(u0), direction from (u1, u2).
+
+    Parameters
+    ----------
+    u : (..., 3) float
+        Points in [0, 1)^3.
+
+    Returns
+    -------
+    (..., 3) float64
+        Points with |x| < 1 and z >= 0.
+
+    Examples
+    --------
+    >>> x = cube_to_uniform_half_ball(np.array([[0.125, 0.0, 0.25], [1.0, 1.0, 0.0]]))
+    >>> np.round(x, 12).tolist()
+    [[0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]
+    """
+    return np.cbrt(u[..., 0])[..., None] * square_to_uniform_hemisphere(u[..., 1:])
+
+
+def square_to_uniform_disk(u: np.ndarray) -> np.ndarray:
+    """(..., 2) uniform in [0, 1)^2 -> (..., 2) uniform in the unit disk (polar map, area preserving).
+
+    Radius sqrt(u0), angle 2 pi u1.
+
+    Parameters
+    ----------
+    u : (..., 2) float
+        Points in [0, 1)^2.
+
+    Returns
+    -------
+    (..., 2) float64
+        Points with |x| < 1.
+
+    Examples
+    --------
+    >>> np.round(square_to_uniform_disk(np.array([[0.25, 0.25], [1.0, 0.5]])), 12).tolist()
+    [[0.0, 0.5], [-1.0, 0.0]]
+    """
+    r = np.sqrt(u[..., 0])
+    phi = 2.0 * np.pi * u[..., 1]
+    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+
+
+def square_to_uniform_half_disk(u: np.ndarray) -> np.ndarray:
+    """(..., 2) uniform in [0, 1)^2 -> (..., 2) uniform in the half disk x >= 0 (area preserving).
+
+    The polar map of :func:`square_to_uniform_disk` with the angle pi u1 - pi / 2.
+
+    Parameters
+    ----------
+    u : (..., 2) float
+        Points in [0, 1)^2.
+
+    Returns
+    -------
+    (..., 2) float64
+        Points with |x| < 1 and x_0 >= 0.
+
+    Examples
+    --------
+    >>> np.round(square_to_uniform_half_disk(np.array([[0.25, 0.5], [1.0, 0.0]])), 12).tolist()
+    [[0.5, 0.0], [0.0, -1.0]]
+    """
+    r = np.sqrt(u[..., 0])
+    phi = np.pi * u[..., 1] - 0.5 * np.pi
+    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+
+
+def square_to_uniform_disk_concentric(u: np.ndarray) -> np.ndarray:
+    """(..., 2) uniform in [0, 1)^2 -> (..., 2) uniform in the unit disk, concentric map.
+
+    The area-preserving, low-distortion map of Shirley & Chiu 1997: squares about the centre
+    of [0, 1)^2 go to circles, so a stratified or low-discrepancy set keeps its spacing.
+
+    Parameters
+    ----------
+    u : (..., 2) float
+        Points in [0, 1)^2.
+
+    Returns
+    -------
+    (..., 2) float64
+        Points with |x| <= 1.
+
+    References
+    ----------
+    Shirley, P. and Chiu, K. 1997. A low distortion map between disk and square. JGT 2(3).
+
+    Examples
+    --------
+    >>> np.round(square_to_uniform_disk_concentric(np.array([[0.5, 0.5], [1.0, 0.5], [0.5, 0.0]])), 12).tolist()
+    [[0.0, 0.0], [1.0, 0.0], [-0.0, -1.0]]
+    """
+    a = 2.0 * u[..., 0] - 1.0
+    b = 2.0 * u[..., 1] - 1.0
+    big_a = np.abs(a) > np.abs(b)
+    r = np.where(big_a, a, b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phi = np.where(big_a, 0.25 * np.pi * b / np.where(a == 0, 1.0, a),
+                       0.5 * np.pi - 0.25 * np.pi * a / np.where(b == 0, 1.0, b))
+    phi = np.where(r == 0, 0.0, phi)
+    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
 
 
 def tangent_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,7 @@ from scipy import ndimage, special
 from scipy.spatial import cKDTree
 
 from .._validate import as_array, check_choice
-from ..patterns import DISK_GRID, SamplePattern, _grid
+from ..patterns import DISK_GRID, SamplePattern, grid_cells
 from . import _common as C
 from .line import falloff_integral
 
@@ -252,7 +252,7 @@ def _region_areas_cached(key: bytes, n: int) -> np.ndarray:
     points = np.frombuffer(key, dtype=np.float64).reshape(n, 2)
     if n == 1:
         return np.array([np.pi])
-    cells = _grid(2, DISK_GRID)
+    cells = grid_cells(2, DISK_GRID)
     _, owner = cKDTree(points).query(cells)
     area = np.bincount(owner, minlength=n) * (2.0 / DISK_GRID) ** 2
     # a region that no grid cell falls into (coincident points) still gets one cell
