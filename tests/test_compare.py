@@ -171,6 +171,8 @@ def test_verdict_fronts_and_the_cheapest_configuration_meeting_the_target():
     assert g["cheapest_time"] == "line:5" and g["cheapest_taps"] == "line:5"     # 0.30 <= 0.30
     g = C.verdict(ROWS, target_rmse=0.27, budget_ms=10)["groups"][0]
     assert g["cheapest_time"] == "line:9" and g["cheapest_taps"] == "line:9" and g["best_in_budget"] == "line:9"
+    g = C.verdict(ROWS, target_rmse=0.26)["groups"][0]                   # met exactly counts as met
+    assert g["cheapest_time"] == "line:9"
     g = C.verdict(ROWS, target_rmse=0.1, budget_ms=1)["groups"][0]
     assert g["cheapest_time"] is None and g["best_in_budget"] is None
     assert any("No configuration reaches RMSE 0.1000" in s for s in C.verdict(ROWS, target_rmse=0.1)["text"])
@@ -209,3 +211,15 @@ def test_default_suggestion_on_a_thin_walled_scene(tmp_path):
     best = v["thickness"]["best"]
     assert best["volumetric_rmse"] < 0.8 * best["baseline_rmse"]
     assert any(s.startswith("Thickness model") and "Use --thickness" in s for s in v["text"])
+
+
+def test_verdict_also_ranks_the_sampling_error_alone():
+    """Against the world-space VO every estimator sits on the same screen-space floor; against
+    the converged screen-space VO the sampling error alone separates them."""
+    rows = [dict(_r("line:5", 0.004, 5, 0.32), screen_rmse=0.045), dict(_r("point:33", 0.07, 32, 0.33),
+                                                                       screen_rmse=0.023)]
+    groups = {g["error"]: g for g in C.verdict(rows)["groups"]}
+    assert groups["own_rmse"]["reference"] == "volumetric" and groups["own_rmse"]["best"] == "line:5"
+    assert groups["screen_rmse"]["reference"] == "screen" and groups["screen_rmse"]["best"] == "point:33"
+    assert groups["screen_rmse"]["front_time"] == ["line:5", "point:33"]
+    assert groups["screen_rmse"]["cheapest_time"] == "point:33"        # 0.045 > 1.5 x 0.023

@@ -373,7 +373,9 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
     """The answer to "which estimator, with how many samples, at what cost?" from compare rows.
 
     Each configuration is judged against its own reference (``own_reference``: the reference
-    of the quantity it estimates). Per own reference (and radius): the Pareto front in time
+    of the quantity it estimates), and, where the converged screen-space VO is its limit,
+    against that too (``screen_rmse``: the sampling error alone, which is what the choice of
+    estimator and sample count controls). Per reference (and radius): the Pareto front in time
     and in taps, the cheapest configuration meeting the target RMSE (default
     :data:`TARGET_FACTOR` x the best error) in time and in taps, the most accurate one
     within ``budget_ms``; then which term of the decomposition dominates the best
@@ -382,7 +384,8 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
     Returns
     -------
     dict
-        ``text`` (list of sentences), ``groups`` (per reference and radius: ``front_time``,
+        ``text`` (list of sentences), ``groups`` (per reference, radius and error column:
+        ``error``, ``front_time``,
         ``front_taps``, ``target_rmse``, ``cheapest_time``, ``cheapest_taps``,
         ``best_in_budget``, ``best``), ``dominant`` (per radius: the terms' RMSE and the
         dominant one), ``thickness`` (the trials and the best of them).
@@ -399,31 +402,38 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
     """
     text, groups, dominant = [], [], []
     shippable = [r for r in rows if not r.get("reference_only", False)]
-    keys = sorted({(r["own_reference"], r["radius"]) for r in shippable if r.get("own_reference")},
-                  key=lambda k: (REFERENCES.index(k[0]), k[1]))
-    for ref, radius in keys:
-        sel = [r for r in shippable if r["own_reference"] == ref and r["radius"] == radius
-               and np.isfinite(r["own_rmse"])]
+    # (reference, radius, error column): each configuration against its own quantity's
+    # reference, and -- for estimators whose limit is the converged screen-space VO -- against
+    # that as well, which isolates the sampling error the choice of estimator controls
+    keys = {(r["own_reference"], r["radius"], "own_rmse") for r in shippable if r.get("own_reference")}
+    keys |= {("screen", r["radius"], "screen_rmse") for r in shippable
+             if r.get("own_reference") not in (None, "screen") and np.isfinite(r.get("screen_rmse", np.nan))}
+    for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", REFERENCES.index(k[0]))):
+        sel = [r for r in shippable if r["radius"] == radius and np.isfinite(r.get(col, np.nan))
+               and (r.get("own_reference") == ref if col == "own_rmse" else True)]
         if not sel:
             continue
-        err = np.array([r["own_rmse"] for r in sel])
+        err = np.array([r[col] for r in sel])
         best = sel[int(np.argmin(err))]
-        target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best["own_rmse"]
-        g = dict(reference=ref, radius=radius, target_rmse=target, best=best["label"], best_rmse=best["own_rmse"])
+        target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best[col]
+        g = dict(reference=ref, radius=radius, error=col, target_rmse=target, best=best["label"],
+                 best_rmse=best[col])
         for cost, name in (("seconds", "time"), ("taps_per_pixel", "taps")):
             x = np.array([r[cost] for r in sel], float)
             g[f"front_{name}"] = [sel[i]["label"] for i in pareto_front(x, err)]
-            ok = [r for r in sel if r["own_rmse"] <= target and np.isfinite(r[cost])]
-            g[f"cheapest_{name}"] = min(ok, key=lambda r: (r[cost], r["own_rmse"]))["label"] if ok else None
+            ok = [r for r in sel if r[col] <= target and np.isfinite(r[cost])]
+            g[f"cheapest_{name}"] = min(ok, key=lambda r: (r[cost], r[col]))["label"] if ok else None
         if budget_ms is not None:
             within = [r for r in sel if np.isfinite(r["seconds"]) and 1e3 * r["seconds"] <= budget_ms]
-            g["best_in_budget"] = min(within, key=lambda r: r["own_rmse"])["label"] if within else None
+            g["best_in_budget"] = min(within, key=lambda r: r[col])["label"] if within else None
         groups.append(g)
-        what = ("the converged screen-space VO (sampling error only; no world-space reference was computed)"
-                if ref == "screen" else f"the ray-cast {'world-space VO' if ref == 'volumetric' else ref}")
+        if ref == "screen":
+            what = "the converged screen-space VO (the sampling error alone)"
+        else:
+            what = f"the ray-cast {'world-space VO' if ref == 'volumetric' else ref} (the method's own quantity)"
         by_label = {r["label"]: r for r in sel}
         lines = [f"Against {what} at R = {radius:.4g}: the most accurate is {best['label']} "
-                 f"(RMSE {best['own_rmse']:.4f}, {_ms(best['seconds'])}, {best['taps_per_pixel']} taps/px)."]
+                 f"(RMSE {best[col]:.4f}, {_ms(best['seconds'])}, {best['taps_per_pixel']} taps/px)."]
         for name, unit in (("time", "time"), ("taps", "taps per pixel")):
             cheap = g[f"cheapest_{name}"]
             if cheap is None:
@@ -432,11 +442,11 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
             c = by_label[cheap]
             lines.append(f"Cheapest in {unit} with RMSE <= {target:.4f}"
                          f"{'' if target_rmse is not None else f' ({TARGET_FACTOR:g} x the best)'}: "
-                         f"{cheap} (RMSE {c['own_rmse']:.4f}, {_ms(c['seconds'])}, {c['taps_per_pixel']} taps/px).")
+                         f"{cheap} (RMSE {c[col]:.4f}, {_ms(c['seconds'])}, {c['taps_per_pixel']} taps/px).")
         lines.append(f"Pareto front in time: {', '.join(g['front_time'])}; in taps: {', '.join(g['front_taps'])}.")
         if budget_ms is not None:
             b = g["best_in_budget"]
-            lines.append(f"Within {budget_ms:g} ms: " + (f"{b} (RMSE {by_label[b]['own_rmse']:.4f})." if b
+            lines.append(f"Within {budget_ms:g} ms: " + (f"{b} (RMSE {by_label[b][col]:.4f})." if b
                                                          else "no configuration fits."))
         text.append(" ".join(lines))
     # which error term dominates, for the most accurate configuration against the world-space VO
