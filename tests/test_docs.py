@@ -127,3 +127,26 @@ def test_compare_page_example_runs(tmp_path, monkeypatch):
     assert [(r["method"], r["samples"]) for r in rows] == [("line", 5), ("point", 12)]
     assert all(0.0 <= r["screen_rmse"] < 1.0 for r in rows)
     assert not any(tmp_path.iterdir()), "write=False wrote files"
+
+
+def test_methods_page_examples_run(capsys):
+    """docs/methods.md: the registry listing and the ten-line "adding an estimator" example
+    run as written; the new method gets a row beside the registered one, and is removed after."""
+    from vobscure import methods
+
+    blocks = _python_blocks(DOCS / "methods.md")
+    assert len(blocks) == 2, "methods.md lost an example"
+    adding = blocks[1].strip().splitlines()
+    assert len([line for line in adding if line.strip()]) <= 14, "the example should stay short"
+    namespace = {"__name__": "docs_methods"}
+    try:
+        for block in blocks:
+            exec(compile(block, str(DOCS / "methods.md"), "exec"), namespace)
+        labels = [r["label"] for r in namespace["res"].rows]
+        assert labels == ["random_points:12", "point:12"]
+        assert "random_points" in methods.names()
+    finally:
+        if "random_points" in methods.names():
+            methods.unregister("random_points")
+    out = capsys.readouterr().out
+    assert "point:33 32 128 half-ball VO" in out
