@@ -197,13 +197,15 @@ def test_registered_and_quick_mode_generates_no_electrostatic_pattern(monkeypatc
     assert "fig4_noise" in names and "patterns_quality" in names and "patterns_quality" in FIGURES
     assert order.index("fig4_noise") < order.index("fig5_thickness")
 
-    real = P._generate
+    from vobscure.patterns import generators
+
+    real = generators.generate
 
     def no_electrostatic(dim, n, method, *args, **kwargs):
         assert method != "electrostatic", f"generated an electrostatic pattern (dim {dim}, n {n}) at run time"
         return real(dim, n, method, *args, **kwargs)
 
-    monkeypatch.setattr(P, "_generate", no_electrostatic)
+    monkeypatch.setattr(generators, "generate", no_electrostatic)   # what disk/ball and the tables call
     for estimator, counts in (("line", F.LINE_COUNTS[True] + F.LINE_COUNTS[False]),
                               ("point", F.POINT_COUNTS[True] + F.POINT_COUNTS[False])):
         for variant in F.VARIANTS[estimator]:

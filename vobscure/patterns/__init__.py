@@ -84,9 +84,3 @@ __all__ = [
     "METHODS",
     "TABLE_DIR",
 ]
-
-# The names vobscure.experiments.figures.patterns_quality and tests/test_fig4_noise.py use.
-_generate = generate
-_pattern = make_pattern
-_squared_errors = squared_errors
-_variant_flags = variant_flags

@@ -166,6 +166,7 @@ def load_table(domain: str, method: str = "electrostatic", *, variant: str = "sy
         out[n] = table_entry(dim, method, symmetric, center, n, prov["seed"], directory)
     return out
 
+
 def _copy(p: SamplePattern) -> SamplePattern:
     return exact_pattern(p.points.copy(), p.weights, p.method, json.loads(json.dumps(p.provenance)))
 

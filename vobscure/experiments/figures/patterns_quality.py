@@ -119,11 +119,11 @@ def measure(quick: bool = False, *, methods=None, trials=None, seed=None, family
             for n in counts:
                 p = table.get(n)
                 if p is None:
-                    symmetric, center = P._variant_flags(variant, n)
-                    p = P._pattern(dim, n, method, center, symmetric, 0)
+                    symmetric, center = P.precomputed.variant_flags(variant, n)
+                    p = P.constructors.make_pattern(dim, n, method, center, symmetric, 0)
                 sources.add(p.provenance.get("source", "?").split(" ")[0])
                 secs.append(float(p.provenance.get("seconds", np.nan)))
-                e2 = P._squared_errors(p, trials=trials, seed=seed, family=family)
+                e2 = P.metric.squared_errors(p, trials=trials, seed=seed, family=family)
                 rms = math.sqrt(float(np.mean(e2)))
                 ns.append(n)
                 val.append(rms)
