@@ -8,7 +8,7 @@
 - :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
 - :func:`noise_texture` / :func:`noise_at`: the small tiled random texture that randomizes
   patterns per pixel.
-- :func:`warp`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
+- :func:`warper`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
 - :func:`tangent_plane_line`: the tangent plane's line coordinate (Loos & Sloan 2010, Sec. 4.4).
 
 Used by the modules of :mod:`vobscure.screenspace` only (tests and benchmarks also reach in);
@@ -427,8 +427,9 @@ def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str =
     return (d, ok | ~finite | (outside & (offscreen == "open"))) if with_mask else d
 
 
-def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
-    """View depth -> the line coordinate of the unit sphere around each pixel's point.
+def warper(px: Pixels, radius: float):
+    """View depth -> the line coordinate of the unit sphere around each pixel's point, as a
+    one-argument function of the depth with the pixels' constants precomputed.
 
     Orthographic: (d - z_p) / R, the paper's mapping. Perspective: (z_p / R) (1 - z_p / d),
     the same to first order in (d - z_p) / z_p, but exact for planes: 1/d is affine across
@@ -437,11 +438,6 @@ def warp(px: Pixels, depth: np.ndarray, radius: float) -> np.ndarray:
     ``docs/screenspace.md``). +inf (background) maps to z_p / R (far behind every segment
     end) in perspective, +inf in orthographic.
     """
-    return warper(px, radius)(depth)
-
-
-def warper(px: Pixels, radius: float):
-    """:func:`warp` for these pixels as a one-argument function, constants precomputed."""
     z = px.z
     if px.perspective:
         # d_r = (z_p / R) (1 - z_p / d) = a - b / d (docs/screenspace.md, "Where vobscure
@@ -485,7 +481,7 @@ def tangent_plane_line(px: Pixels, xy: np.ndarray, *, clip: bool = True) -> np.n
 
     Loos & Sloan Sec. 4.4 (and footnote 4): in the unit sphere's frame the plane is given by
     the view-space normal. Orthographic: -(n_x x + n_y y) / n_z. Perspective, in the warped
-    coordinate of :func:`warp`: -z_p (n_x x + n_y y) / (n . p). Grazing normals (denominator
+    coordinate of :func:`warper`: -z_p (n_x x + n_y y) / (n . p). Grazing normals (denominator
     -> 0) give +-large values, which the segment clamp turns into "all open" or "all closed".
     """
     gx, gy = tangent_plane_coefficients(px)
