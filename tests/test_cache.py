@@ -370,3 +370,43 @@ def test_bad_arguments(tmp_path, view):
     with pytest.raises(ValueError, match="gbuffer"):
         C.ground_truth_cached(scene, gb.depth, cache=cache)
     assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- defaults from the cached function
+def test_cached_wrappers_take_the_defaults_of_what_they_cache(tmp_path, view, monkeypatch):
+    """The cached call with no options computes what the direct call with no options does;
+    the wrappers' signatures are those of ground_truth / vo_reference plus cache."""
+    import inspect
+
+    scene, gb = view
+    for wrapper, fn, first in ((C.ground_truth_cached, vo.ground_truth, ["scene", "gbuffer"]),
+                               (C.screen_reference_cached, vo.vo_reference, ["gbuffer", "scene"])):
+        sig, own = inspect.signature(wrapper), inspect.signature(fn)
+        keywords = {n: p.default for n, p in own.parameters.items() if p.kind is p.KEYWORD_ONLY}
+        assert list(sig.parameters) == first + ["cache"] + list(keywords)
+        assert {n: sig.parameters[n].default for n in keywords} == keywords
+    cached, _ = C.ground_truth_cached(scene, gb, cache=None, quantity="volumetric", radius=RADIUS)
+    direct = vo.ground_truth(scene, gb, quantity="volumetric", radius=RADIUS)
+    assert cached.value.tobytes() == direct.value.tobytes() and cached.samples == direct.samples
+    screen, _ = C.screen_reference_cached(gb, cache=None, radius=RADIUS)
+    assert screen.value.tobytes() == vo.vo_reference(gb, radius=RADIUS).value.tobytes()
+    # an unknown keyword is an error, not a silently ignored key field
+    with pytest.raises(TypeError, match="ray_count"):
+        C.ground_truth_cached(scene, gb, cache=None, ray_count=3)
+    with pytest.raises(TypeError, match="radius"):
+        C.screen_reference_cached(gb, cache=None)
+
+
+def test_defaults_fill_the_key(tmp_path, view):
+    scene, gb = view
+    cache = ReferenceCache(tmp_path)
+    kw = dict(cache=cache, quantity="volumetric", radius=RADIUS, samples=16, seed=0)
+    assert not C.ground_truth_cached(scene, gb, **kw)[1]
+    assert C.ground_truth_cached(scene, gb, votes=3, groups=8, normal_clamp=False, falloff="constant",
+                                 progress=True, threads=1, **kw)[1]
+    assert C.ground_truth_cached("crease", gb, **kw)[1]                  # the same scene, by name
+    assert not C.ground_truth_cached(scene, gb, votes=5, **kw)[1]        # votes change the numbers
+    screen = dict(cache=cache, radius=RADIUS, samples=32, seed=0)
+    assert not C.screen_reference_cached(gb, **screen)[1]
+    assert C.screen_reference_cached(gb, "crease", groups=8, fetch="bilinear", progress=True, **screen)[1]
+    assert not C.screen_reference_cached(gb, groups=4, **screen)[1]

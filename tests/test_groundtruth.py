@@ -89,7 +89,7 @@ def test_crease_ball_vo(crease):
 
 def test_crease_half_ball_vo(crease):
     p, n = crease_points(C_VALUES)
-    e = vo.volumetric_obscurance(crease, p, n, radius=R, samples=2048, seed=4, groups=GROUPS)
+    e = vo.volumetric_obscurance(crease, p, n, radius=R, normal_clamp=True, samples=2048, seed=4, groups=GROUPS)
     assert_unbiased(e, half_ball_vo_exact(C_VALUES), df=DF)
 
 
@@ -97,8 +97,8 @@ def test_crease_quadratic_vo_against_quadrature(crease):
     """Falloff 1 - r^2 on the half ball: exact value by quadrature over the wall's cap."""
     c = np.array([0.2, 0.6])
     p, n = crease_points(c)
-    e = vo.volumetric_obscurance(crease, p, n, radius=R, samples=2048, falloff="quadratic", seed=5,
-                                 groups=GROUPS)
+    e = vo.volumetric_obscurance(crease, p, n, radius=R, normal_clamp=True, samples=2048, falloff="quadratic",
+                                 seed=5, groups=GROUPS)
     exact = []
     for ci in c:
         # occupied part of the half ball (y > 0): x < -c (wall). Integrate rho over the cap
@@ -158,7 +158,7 @@ def test_slab_exact_values(slab):
     np.testing.assert_array_equal(ao.stderr, 0.0)
     v = vo.volumetric_obscurance(slab, pts, radius=0.7, samples=512, seed=0)
     np.testing.assert_array_equal(v.value, 0.5)   # antithetic pairs split exactly by the plane
-    vh = vo.volumetric_obscurance(slab, pts, up, radius=0.7, samples=512, seed=0)
+    vh = vo.volumetric_obscurance(slab, pts, up, radius=0.7, normal_clamp=True, samples=512, seed=0)
     np.testing.assert_array_equal(vh.value, 1.0)
 
 
@@ -286,7 +286,9 @@ def test_bad_points_and_normals(crease):
     with pytest.raises(ValueError, match="normals"):
         vo.ambient_occlusion(crease, [[0, 0, 0], [1, 0, 0]], [[0, 1, 0]])
     with pytest.raises(ValueError, match="scene"):
-        vo.ambient_occlusion("crease", [[0, 0, 0]], [[0, 1, 0]])
+        vo.ambient_occlusion("no_such_scene", [[0, 0, 0]], [[0, 1, 0]])
+    with pytest.raises(ValueError, match="scene"):
+        vo.ambient_occlusion(3, [[0, 0, 0]], [[0, 1, 0]])
     with pytest.raises(ValueError, match="radius"):
         vo.volumetric_obscurance(crease, [[0, 0, 0]], radius=0)
     with pytest.raises(ValueError, match="falloff"):
@@ -311,3 +313,67 @@ def test_ground_truth_bad_arguments(crease):
 def test_empty_point_set(crease):
     e = vo.ambient_occlusion(crease, np.zeros((0, 3)), np.zeros((0, 3)) + [0, 1, 0], rays=16)
     assert e.value.shape == (0,)
+
+
+# ----------------------------------------------------------------------------- one vocabulary
+def test_normal_clamp_selects_the_half_ball(slab):
+    pts = np.array([[0.0, 0.0, 0.0], [1.3, 0.0, -2.1]])
+    up = np.tile([0.0, 1.0, 0.0], (2, 1))
+    # DESIGN.md's contract line: normals optional when unclamped
+    ball = vo.volumetric_obscurance(slab, pts, normals=None, radius=0.7, samples=512, seed=0)
+    np.testing.assert_array_equal(ball.value, 0.5)
+    # normals alone no longer select the half-ball: unclamped, they are unused
+    with_normals = vo.volumetric_obscurance(slab, pts, up, radius=0.7, samples=512, seed=0)
+    assert with_normals.value.tobytes() == ball.value.tobytes()
+    assert with_normals.stderr.tobytes() == ball.stderr.tobytes()
+    half = vo.volumetric_obscurance(slab, pts, up, radius=0.7, normal_clamp=True, samples=512, seed=0)
+    np.testing.assert_array_equal(half.value, 1.0)
+    with pytest.raises(ValueError, match="normal_clamp=True needs normals") as info:
+        vo.volumetric_obscurance(slab, pts, radius=0.7, normal_clamp=True)
+    assert "normals" in str(info.value) and "normal_clamp" in str(info.value)
+    with pytest.raises(ValueError, match="normal_clamp"):
+        vo.volumetric_obscurance(slab, pts, up, radius=0.7, normal_clamp="yes")
+
+
+def test_ground_truth_passes_votes_on(crease, monkeypatch):
+    from vobscure import groundtruth as G
+
+    cam = vo.Camera.look_at((2.0, 2.0, 3.0), (0.5, 0.3, 0.0), size=(6, 5), fov_y=50.0)
+    gb = vo.render_gbuffer(crease, cam)
+    seen = []
+    real = G._volumetric
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs["votes"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(G, "_volumetric", spy)
+    gt = vo.ground_truth(crease, gb, quantity="volumetric", radius=R, samples=32, votes=5, seed=2)
+    vo.ground_truth(crease, gb, quantity="volumetric", radius=R, samples=32, seed=2)
+    direct = vo.volumetric_obscurance(crease, gb.hits["world_position"], radius=R, samples=32, votes=5, seed=2)
+    assert seen == [5, 3, 5]
+    assert gt.value[gb.valid].tobytes() == direct.value.tobytes()
+    with pytest.raises(ValueError, match="votes"):
+        vo.ground_truth(crease, gb, quantity="volumetric", radius=R, samples=32, votes=4)
+
+
+def test_one_progress_default_and_sample_names():
+    """progress is off by default in every public function that has it; ``rays`` counts
+    directions and ``samples`` points in a volume (docs/conventions.md)."""
+    import inspect
+
+    from vobscure.experiments import cache
+
+    functions = [vo.ground_truth, vo.ambient_occlusion, vo.obscurance, vo.volumetric_obscurance,
+                 vo.vo_reference, cache.ground_truth_cached, cache.screen_reference_cached]
+    for fn in functions:
+        params = inspect.signature(fn).parameters
+        assert params["progress"].default is False, fn.__name__
+    for fn in (vo.ambient_occlusion, vo.obscurance):
+        params = inspect.signature(fn).parameters
+        assert "rays" in params and "samples" not in params, fn.__name__
+    for fn in (vo.volumetric_obscurance, vo.vo_reference):
+        params = inspect.signature(fn).parameters
+        assert "samples" in params and "rays" not in params, fn.__name__
+    for fn in (vo.volumetric_obscurance, vo.ground_truth, vo.vo_reference):
+        assert inspect.signature(fn).parameters["normal_clamp"].default is False, fn.__name__

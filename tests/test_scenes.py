@@ -649,3 +649,58 @@ def test_round_trip_gltf_with_external_buffer(tmp_path):
     assert len(scene.triangles) == len(mesh.faces)
     assert scene.is_watertight
     assert scene.meshes["model"].volume == pytest.approx(mesh.volume, rel=FLOAT32_RTOL)
+
+
+# --------------------------------------------------------------------------------------
+# the one resolver of a scene argument: as_scene / resolve
+# --------------------------------------------------------------------------------------
+
+def test_resolve_every_kind_of_scene(tmp_path, monkeypatch):
+    from vobscure.scenes import as_scene, resolve
+
+    built, name = resolve("crease")
+    assert isinstance(built, Scene) and name == "crease" and built.name == "crease"
+    own = scenes.slab(size=3.0)
+    assert resolve(own) == (own, "custom") and as_scene(own) is own
+    box = trimesh.creation.box(extents=(2, 1, 1))
+    wrapped, name = resolve(box)
+    assert isinstance(wrapped, Scene) and name == "custom" and len(wrapped.triangles) == 12
+    path = tmp_path / "brick.ply"
+    box.export(path)
+    for spec in (path, str(path)):
+        loaded, name = resolve(spec)
+        assert name == "brick" and len(loaded.triangles) == 12
+    # a built-in name wins over a path of that name in the working folder
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "slab").mkdir()
+    assert resolve("slab")[1] == "slab" and resolve("brick.ply")[1] == "brick"
+
+
+def test_resolve_errors_name_the_argument_and_the_built_in_scenes(tmp_path):
+    from vobscure.scenes import as_scene, resolve
+
+    for bad in ("cornel_box", 3, None, np.zeros((3, 3))):
+        with pytest.raises(ValueError, match="scene must be") as info:
+            resolve(bad)
+        assert all(n in str(info.value) for n in names())
+    with pytest.raises(FileNotFoundError, match="cornell_box") as info:
+        as_scene(tmp_path / "missing.obj")
+    assert "missing.obj" in str(info.value)
+    with pytest.raises(ValueError, match="^target must be"):
+        as_scene("nothing", argument="target")
+
+
+def test_scene_arguments_go_through_the_resolver():
+    """ground truth, G-buffers and cache digests take a scene's name as well as the scene."""
+    import vobscure as vo
+    from vobscure.experiments.cache import scene_digest
+
+    assert {"as_scene", "resolve"} <= set(scenes.__all__)
+    cam = vo.Camera.look_at((0, 3, 0), (0, 0, 0), up=(0, 0, -1), size=(4, 4), ortho_height=2.0)
+    a, b = vo.render_gbuffer("slab", cam), vo.render_gbuffer(scenes.slab(), cam)
+    assert np.array_equal(a.depth, b.depth)
+    assert scene_digest("slab") == scene_digest(scenes.slab())
+    e = vo.ambient_occlusion("slab", [[0, 0, 0]], [[0, 1, 0]], rays=16)
+    assert e.value[0] == 1.0
+    with pytest.raises(ValueError, match="blob, cornell_box"):
+        vo.ground_truth("no-such-scene", a)

@@ -167,10 +167,10 @@ def render_gbuffer(scene, camera) -> GBuffer:
     [0.0, 1.0, 0.0]
     """
     from .camera import Camera
-    from .groundtruth import _as_scene
+    from .scenes import as_scene
     from .raytrace import CHUNK_RAYS, default_threads, parallel_map
 
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a vobscure Camera, got {type(camera).__name__}")
     H, W = camera.height, camera.width

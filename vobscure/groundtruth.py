@@ -12,7 +12,11 @@ estimates. The value is their mean and the standard error is their standard devi
 sqrt(groups): a Student-t quantity with ``groups - 1`` degrees of freedom. Rays of one point
 are contiguous in memory, which keeps Embree's traversal coherent.
 
-All functions accept a :class:`~vobscure.scenes.Scene` or a ``trimesh.Trimesh``.
+All functions accept what :func:`vobscure.scenes.as_scene` accepts: a
+:class:`~vobscure.scenes.Scene`, a ``trimesh.Trimesh``, a built-in scene's name or a mesh
+file's path. Sample counts are ``rays`` for directions (ambient occlusion, obscurance) and
+``samples`` for points in a volume (volumetric obscurance); ``progress`` (a tqdm bar) is off
+by default everywhere, as in the rest of the library (``docs/conventions.md``).
 """
 
 from __future__ import annotations
@@ -20,7 +24,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-import trimesh
 from tqdm.auto import tqdm
 
 from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
@@ -28,10 +31,10 @@ from .estimate import DEFAULT_GROUPS, Estimate
 from .raytrace import CHUNK_RAYS, parallel_map
 from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base,
                        square_to_cosine_hemisphere, square_to_uniform_hemisphere)
-from .scenes import Scene
+from .scenes import Scene, as_scene
 
 __all__ = ["ambient_occlusion", "obscurance", "volumetric_obscurance", "ground_truth",
-           "OBSCURANCE_FALLOFFS", "VO_FALLOFFS", "DEFAULT_GROUPS"]
+           "OBSCURANCE_FALLOFFS", "VO_FALLOFFS", "DEFAULT_GROUPS", "DEFAULT_FALLOFF", "QUANTITIES"]
 
 _WARPS = {"cosine": square_to_cosine_hemisphere, "uniform": square_to_uniform_hemisphere}
 
@@ -58,14 +61,6 @@ VO_FALLOFFS = {
     # 1 - r^2: integral 4 pi (1/3 - 1/5) = 8 pi / 15 over the ball's 4 pi / 3 -> 2/5.
     "quadratic": (lambda r2: 1.0 - r2, 2.0 / 5.0),
 }
-
-
-def _as_scene(scene) -> Scene:
-    if isinstance(scene, Scene):
-        return scene
-    if isinstance(scene, trimesh.Trimesh):
-        return Scene(scene)
-    raise ValueError(f"scene must be a vobscure Scene or a trimesh.Trimesh, got {type(scene).__name__}")
 
 
 def _groups(count: int, groups: int, name: str) -> tuple[int, int]:
@@ -167,7 +162,8 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
 
     Parameters
     ----------
-    scene : Scene or trimesh.Trimesh
+    scene : Scene, trimesh.Trimesh, str or os.PathLike
+        Anything :func:`vobscure.scenes.as_scene` accepts.
     points : (n, 3) float
         Surface points, world space.
     normals : (n, 3) float
@@ -185,7 +181,7 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
         Independent randomizations (stderr degrees of freedom + 1).
     threads : int, optional
     progress : bool
-        Show a tqdm progress bar.
+        Show a tqdm progress bar (default False, as everywhere in vobscure).
 
     Returns
     -------
@@ -204,7 +200,7 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
     >>> float(e.value[0]), float(e.stderr[0])
     (1.0, 0.0)
     """
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     points = as_points(points, "points")
     normals = as_unit_vectors(normals, "normals", count=len(points))
     rays = check_int(rays, "rays", minimum=2)
@@ -260,7 +256,8 @@ def obscurance(scene, points, normals, *, radius: float, falloff="linear", rays:
 
     Parameters
     ----------
-    scene : Scene or trimesh.Trimesh
+    scene : Scene, trimesh.Trimesh, str or os.PathLike
+        Anything :func:`vobscure.scenes.as_scene` accepts.
     points, normals : (n, 3) float
     radius : float
         d_max: the distance beyond which geometry no longer obscures.
@@ -288,7 +285,7 @@ def obscurance(scene, points, normals, *, radius: float, falloff="linear", rays:
     >>> float(e.value[0])
     1.0
     """
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     points = as_points(points, "points")
     normals = as_unit_vectors(normals, "normals", count=len(points))
     radius = check_positive(radius, "radius")
@@ -357,8 +354,15 @@ def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes
     return Estimate(value=value, stderr=stderr, samples=g * 2 * m)
 
 
-def volumetric_obscurance(scene, points, normals=None, *, radius: float, samples: int = 4096,
-                          falloff: str = "constant", seed=0, votes: int = 3,
+def _check_votes(votes) -> int:
+    votes = check_int(votes, "votes")
+    if votes % 2 == 0:
+        raise ValueError(f"votes must be odd so that a majority exists, got {votes}")
+    return votes
+
+
+def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_clamp: bool = False,
+                          samples: int = 4096, falloff: str = "constant", seed=0, votes: int = 3,
                           allow_open: bool = False, groups: int = DEFAULT_GROUPS,
                           threads: int | None = None, progress: bool = False) -> Estimate:
     r"""World-space Volumetric Obscurance: the unoccupied fraction of a ball around each point.
@@ -366,28 +370,35 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, samples
     .. math:: V(P) = \int_X \rho(d(P, x)) O(x) \, dx \Big/ \int_X \rho(d(P, x)) \, dx
 
     (Loos & Sloan 2010, Sec. 4), X the ball of ``radius`` around P, or the half-ball on the
-    normal's side when ``normals`` are given (Sec. 4.4); O is 1 in empty space and 0
-    inside a solid. A point on a flat open surface has V = 0.5 (1.0 with normals).
+    normal's side with ``normal_clamp=True`` (Sec. 4.4); O is 1 in empty space and 0 inside
+    a solid. A point on a flat open surface has V = 0.5 (1.0 clamped).
 
     Parameters
     ----------
-    scene : Scene or trimesh.Trimesh
-        Closed, consistently wound, non-interpenetrating solids.
+    scene : Scene, trimesh.Trimesh, str or os.PathLike
+        Anything :func:`vobscure.scenes.as_scene` accepts: closed, consistently wound,
+        non-interpenetrating solids.
     points : (n, 3) float
     normals : (n, 3) float, optional
-        Restrict to the half-ball on the normal's side.
+        Unit normals on the open side (renormalized); required with ``normal_clamp=True``,
+        unused otherwise.
     radius : float
+    normal_clamp : bool
+        The half-ball on the normal's side instead of the ball (default False), as
+        ``normal_clamp`` of :func:`ground_truth` and of the screen-space estimators. Before
+        this keyword existed, passing ``normals`` selected the half-ball; now it must be
+        asked for.
     samples : int
         Points per ball (antithetic pairs x, -x; rounded up to a multiple of 2 * groups).
     falloff : {"constant", "quadratic"}
         rho = 1 (the paper's choice) or 1 - (d / radius)^2 (its other candidate).
     seed : int, Generator or None
     votes : int
-        Odd number of rays per inside test (majority vote).
+        Odd number of rays per inside test (majority vote; default 3).
     allow_open : bool
         Accept meshes that are not closed (the inside test may then be wrong).
     groups, threads, progress
-        As in :func:`ambient_occlusion`.
+        As in :func:`ambient_occlusion` (``progress`` off by default).
 
     Returns
     -------
@@ -401,54 +412,71 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, samples
     Examples
     --------
     >>> import vobscure as vo
-    >>> e = vo.volumetric_obscurance(vo.scenes.slab(), [[0, 0, 0]], radius=0.5, samples=256)
-    >>> float(e.value[0])
-    0.5
+    >>> slab = vo.scenes.slab()
+    >>> e = vo.volumetric_obscurance(slab, [[0, 0, 0]], radius=0.5, samples=256)
+    >>> h = vo.volumetric_obscurance(slab, [[0, 0, 0]], [[0, 1, 0]], radius=0.5, normal_clamp=True,
+    ...                              samples=256)
+    >>> float(e.value[0]), float(h.value[0])
+    (0.5, 1.0)
     """
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     points = as_points(points, "points")
+    if not isinstance(normal_clamp, (bool, np.bool_)):
+        raise ValueError(f"normal_clamp must be True or False, got {normal_clamp!r}")
+    if normal_clamp and normals is None:
+        raise ValueError("normal_clamp=True needs normals: pass normals (n, 3), the side of each "
+                         "point's half-ball, or normal_clamp=False for the whole ball")
     if normals is not None:
         normals = as_unit_vectors(normals, "normals", count=len(points))
     radius = check_positive(radius, "radius")
     samples = check_int(samples, "samples", minimum=2)
     check_choice(falloff, "falloff", VO_FALLOFFS)
-    votes = check_int(votes, "votes")
-    if votes % 2 == 0:
-        raise ValueError(f"votes must be odd so that a majority exists, got {votes}")
+    votes = _check_votes(votes)
     _check_closed(scene, allow_open)
-    return _volumetric(scene, points, normals, radius=radius, samples=samples, falloff=falloff,
-                       seed=seed, votes=votes, groups=groups, threads=threads, progress=progress)
+    return _volumetric(scene, points, normals if normal_clamp else None, radius=radius, samples=samples,
+                       falloff=falloff, seed=seed, votes=votes, groups=groups, threads=threads,
+                       progress=progress)
 
 
+#: What :func:`ground_truth` computes.
 QUANTITIES = ("ao", "obscurance", "volumetric")
+
+#: The falloff of each quantity when :func:`ground_truth` is given ``falloff=None``.
+DEFAULT_FALLOFF = {"obscurance": "linear", "volumetric": "constant"}
 
 
 def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None = None,
                  rays: int = 256, samples: int = 4096, falloff=None, weighting: str = "cosine",
-                 normal_clamp: bool = False, seed=0, progress: bool = True,
+                 normal_clamp: bool = False, seed=0, votes: int = 3, progress: bool = False,
                  groups: int = DEFAULT_GROUPS, threads: int | None = None,
                  allow_open: bool = False) -> Estimate:
     """The ray-cast reference at every pixel of a G-buffer.
 
     Parameters
     ----------
-    scene : Scene or trimesh.Trimesh
-        The scene the G-buffer was rendered from.
+    scene : Scene, trimesh.Trimesh, str or os.PathLike
+        The scene the G-buffer was rendered from (anything :func:`vobscure.scenes.as_scene`
+        accepts).
     gbuffer : GBuffer
     quantity : {"ao", "obscurance", "volumetric"}
         ``"ao"``: :func:`ambient_occlusion` with ``max_distance=radius`` (inf when radius is
-        None); ``"obscurance"``: :func:`obscurance` (radius required, ``falloff`` default
-        "linear"); ``"volumetric"``: :func:`volumetric_obscurance` (radius required,
-        ``falloff`` default "constant", the half-ball when ``normal_clamp``).
+        None); ``"obscurance"``: :func:`obscurance` (radius required); ``"volumetric"``:
+        :func:`volumetric_obscurance` (radius required, the half-ball when ``normal_clamp``).
     radius : float, optional
     rays : int
-        Rays per pixel (ao, obscurance).
+        Rays (directions) per pixel (ao, obscurance).
     samples : int
         Points per ball (volumetric).
-    falloff, weighting, normal_clamp, seed, groups, threads, allow_open
+    falloff : str, callable or None
+        None: the quantity's default, :data:`DEFAULT_FALLOFF` ("linear" for obscurance,
+        "constant" for volumetric). Unused for ao.
+    weighting, normal_clamp, seed, groups, threads, allow_open
         Passed on.
+    votes : int
+        Odd number of rays per inside test of the volumetric ball (default 3; see
+        :func:`volumetric_obscurance`). Unused for ao and obscurance.
     progress : bool
-        A tqdm progress bar (default on).
+        A tqdm progress bar (default False, as everywhere in vobscure).
 
     Returns
     -------
@@ -463,7 +491,7 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     """
     from .gbuffer import GBuffer
 
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     if not isinstance(gbuffer, GBuffer):
         raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
     check_choice(quantity, "quantity", QUANTITIES)
@@ -483,16 +511,17 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     elif quantity == "obscurance":
         check_choice(weighting, "weighting", _WARPS)
         est = _obscurance(scene, points, normals, geo, radius=radius,
-                          falloff="linear" if falloff is None else falloff,
+                          falloff=DEFAULT_FALLOFF[quantity] if falloff is None else falloff,
                           rays=check_int(rays, "rays", minimum=2), weighting=weighting, seed=seed,
                           groups=groups, threads=threads, progress=progress, desc=desc)
     else:
-        falloff = "constant" if falloff is None else falloff
+        falloff = DEFAULT_FALLOFF[quantity] if falloff is None else falloff
         check_choice(falloff, "falloff", VO_FALLOFFS)
+        votes = _check_votes(votes)
         _check_closed(scene, allow_open)
         est = _volumetric(scene, points, normals if normal_clamp else None, radius=radius,
                           samples=check_int(samples, "samples", minimum=2), falloff=falloff,
-                          seed=seed, votes=3, groups=groups, threads=threads, progress=progress,
+                          seed=seed, votes=votes, groups=groups, threads=threads, progress=progress,
                           desc=desc)
     value = np.full(valid.shape, np.nan)
     stderr = np.full(valid.shape, np.nan)

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import datetime
 import hashlib
+import inspect
 import json
 import math
 import os
@@ -53,11 +54,15 @@ import numpy as np
 
 from .._io import save_npz
 from .._validate import check_choice, check_int, check_positive
-from ..estimate import DEFAULT_GROUPS, Estimate
+from ..estimate import Estimate
+from .. import groundtruth as _groundtruth
+from .. import screenspace as _screenspace
+from ..scenes import as_scene
 
 __all__ = ["ReferenceCache", "CacheWarning", "CacheError", "REFERENCE_CODE_VERSION", "CACHE_FORMAT",
            "CACHE_ENV", "default_directory", "cache_key", "canonical_json", "scene_digest",
-           "gbuffer_digest", "array_digest", "ground_truth_cached", "screen_reference_cached"]
+           "gbuffer_digest", "array_digest", "ground_truth_cached", "screen_reference_cached",
+           "GROUND_TRUTH_KEY_PARAMS"]
 
 #: Version of the code that computes references (ground truth, G-buffer rendering,
 #: ``vo_reference``). Bump it whenever a change alters their numbers: every cached entry made
@@ -188,9 +193,7 @@ def scene_digest(scene) -> str:
     >>> scene_digest(vo.scenes.slab()) == scene_digest(vo.scenes.slab(thickness=2.0))
     False
     """
-    from ..groundtruth import _as_scene
-
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     h = hashlib.sha256()
     for name, mesh in scene.meshes.items():
         h.update(json.dumps([name, scene.smooth_angle.get(name)]).encode())
@@ -523,25 +526,61 @@ def _scene_info(scene) -> dict:
     return {"scene_name": None if name is None else str(name)}
 
 
-def ground_truth_cached(scene, gbuffer, *, cache, quantity: str = "ao", radius=None, rays: int = 256,
-                        samples: int = 4096, falloff=None, weighting: str = "cosine",
-                        normal_clamp: bool = False, seed=0, groups=None, allow_open: bool = False,
-                        threads=None, progress: bool = True) -> tuple[Estimate, bool]:
+def _keyword_defaults(fn) -> dict:
+    """The keyword-only parameters of ``fn`` and their defaults (read from its signature)."""
+    return {n: p.default for n, p in inspect.signature(fn).parameters.items() if p.kind is p.KEYWORD_ONLY}
+
+
+# Read once from the functions themselves, so that a cached call and a direct one with the
+# same arguments always compute the same thing.
+_GROUND_TRUTH_DEFAULTS = _keyword_defaults(_groundtruth.ground_truth)
+_SCREEN_REFERENCE_DEFAULTS = _keyword_defaults(_screenspace.vo_reference)
+
+
+def _with_defaults(defaults: Mapping, params: Mapping, name: str, of: str) -> dict:
+    """``params`` with ``defaults`` filled in; unknown names are an error."""
+    unknown = sorted(set(params) - set(defaults))
+    if unknown:
+        raise TypeError(f"{name}() got unexpected keyword argument(s) {', '.join(unknown)}; it takes "
+                        f"those of {of}: {', '.join(defaults)}")
+    return {**defaults, **params}
+
+
+def _cached_signature(fn, positional: list) -> inspect.Signature:
+    """The signature of a cached wrapper: ``positional``, then ``cache``, then ``fn``'s keywords."""
+    keywords = [p for p in inspect.signature(fn).parameters.values() if p.kind is p.KEYWORD_ONLY]
+    cache = inspect.Parameter("cache", inspect.Parameter.KEYWORD_ONLY)
+    return inspect.Signature([*positional, cache, *keywords], return_annotation="tuple[Estimate, bool]")
+
+
+#: Parameters of :func:`vobscure.ground_truth` that enter the key, per quantity (besides the
+#: radius, the groups and the seed); the others do not change its numbers for that quantity.
+GROUND_TRUTH_KEY_PARAMS = {"ao": ("rays", "weighting"), "obscurance": ("rays", "weighting", "falloff"),
+                           "volumetric": ("samples", "falloff", "normal_clamp", "votes")}
+
+
+def ground_truth_cached(scene, gbuffer, *, cache, **params) -> tuple[Estimate, bool]:
     """:func:`vobscure.ground_truth`, cached.
+
+    Takes the arguments of :func:`vobscure.ground_truth`, with its defaults (read from its
+    signature, so the two never disagree), plus ``cache``.
 
     Parameters
     ----------
-    scene : Scene or trimesh.Trimesh
+    scene : Scene, trimesh.Trimesh, str or os.PathLike
+        Anything :func:`vobscure.scenes.as_scene` accepts.
     gbuffer : GBuffer
     cache : ReferenceCache or None
         None computes without caching.
-    quantity, radius, rays, samples, falloff, weighting, normal_clamp, seed, groups, allow_open
-        As in :func:`vobscure.ground_truth`; ``seed`` must be an int. The key holds only the
-        parameters that ``quantity`` uses (rays for ao and obscurance, samples, falloff and
-        normal_clamp for volumetric, ...), with the defaults filled in, so equivalent calls
-        share an entry.
-    threads, progress
-        Passed on; they do not change the numbers and are not part of the key.
+    **params
+        The keyword arguments of :func:`vobscure.ground_truth` (``quantity``, ``radius``,
+        ``rays``, ``samples``, ``falloff``, ``weighting``, ``normal_clamp``, ``seed``,
+        ``votes``, ``groups``, ``allow_open``, ``threads``, ``progress``); ``seed`` must be
+        an int. The key holds only the parameters that ``quantity`` uses
+        (:data:`GROUND_TRUTH_KEY_PARAMS`: rays for ao and obscurance, samples, falloff,
+        normal_clamp and votes for volumetric, ...) with the defaults filled in, so
+        equivalent calls share an entry. ``allow_open``, ``threads`` and ``progress`` do not
+        change the numbers and are not part of it.
 
     Returns
     -------
@@ -549,6 +588,11 @@ def ground_truth_cached(scene, gbuffer, *, cache, quantity: str = "ao", radius=N
         (H, W) value and stderr, NaN on background.
     hit : bool
         True when it came from the cache.
+
+    Raises
+    ------
+    TypeError
+        For a keyword that :func:`vobscure.ground_truth` does not take.
 
     Notes
     -----
@@ -556,63 +600,68 @@ def ground_truth_cached(scene, gbuffer, *, cache, quantity: str = "ao", radius=N
     G-buffer's hits and its camera, the parameters, the seed and the versions.
     """
     from ..gbuffer import GBuffer
-    from ..groundtruth import OBSCURANCE_FALLOFFS, QUANTITIES, VO_FALLOFFS, ground_truth
+    from ..groundtruth import DEFAULT_FALLOFF, OBSCURANCE_FALLOFFS, QUANTITIES, VO_FALLOFFS
 
     cache = _as_cache(cache)
+    scene = as_scene(scene)
     if not isinstance(gbuffer, GBuffer):
         raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
-    check_choice(quantity, "quantity", QUANTITIES)
-    seed = _seed(seed)
-    groups = DEFAULT_GROUPS if groups is None else check_int(groups, "groups", minimum=2)
+    args = _with_defaults(_GROUND_TRUTH_DEFAULTS, params, "ground_truth_cached", "vobscure.ground_truth")
+    quantity = check_choice(args["quantity"], "quantity", QUANTITIES)
+    args["seed"] = seed = _seed(args["seed"])
+    radius = args["radius"]
     if radius is not None:
         radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
     elif quantity != "ao":
         raise ValueError(f"radius is required for quantity={quantity!r}")
-    params: dict = {"radius": radius, "groups": groups}
-    if quantity in ("ao", "obscurance"):
-        params.update(rays=check_int(rays, "rays", minimum=2), weighting=weighting)
-        if quantity == "ao" and radius is not None and math.isinf(radius):
-            params["radius"] = None   # the same computation as radius=None
-    if quantity == "obscurance":
-        falloff = "linear" if falloff is None else falloff
-        if not isinstance(falloff, str):
-            raise ValueError("falloff must be the name of a falloff to cache an obscurance reference "
-                             f"({', '.join(OBSCURANCE_FALLOFFS)}), got {type(falloff).__name__}")
-        params["falloff"] = falloff
-    if quantity == "volumetric":
-        falloff = "constant" if falloff is None else falloff
-        check_choice(falloff, "falloff", VO_FALLOFFS)
-        params.update(samples=check_int(samples, "samples", minimum=2), falloff=falloff,
-                      normal_clamp=bool(normal_clamp))
+    if args["falloff"] is None and quantity in DEFAULT_FALLOFF:
+        args["falloff"] = DEFAULT_FALLOFF[quantity]
+    key = {"radius": radius, "groups": check_int(args["groups"], "groups", minimum=2)}
+    if quantity == "ao" and radius is not None and math.isinf(radius):
+        key["radius"] = None   # the same computation as radius=None
+    for name in GROUND_TRUTH_KEY_PARAMS[quantity]:
+        value = args[name]
+        if name in ("rays", "samples"):
+            value = check_int(value, name, minimum=2)
+        elif name == "votes":
+            value = check_int(value, name)   # ground_truth checks that it is odd
+        elif name == "normal_clamp":
+            value = bool(value)
+        elif name == "falloff" and not isinstance(value, str):
+            raise ValueError("falloff must be the name of a falloff to cache a reference "
+                             f"({', '.join(OBSCURANCE_FALLOFFS if quantity == 'obscurance' else VO_FALLOFFS)}), "
+                             f"got {type(value).__name__}")
+        key[name] = value
     fields = {"kind": "ground_truth", "quantity": quantity, "scene": scene_digest(scene),
               "gbuffer": gbuffer_digest(gbuffer, world=True), "camera": gbuffer.camera.to_dict(),
-              "params": params, "seed": seed}
+              "params": key, "seed": seed}
 
     def compute():
-        return ground_truth(scene, gbuffer, quantity=quantity, radius=radius, rays=rays, samples=samples,
-                            falloff=falloff, weighting=weighting, normal_clamp=normal_clamp, seed=seed,
-                            progress=progress, groups=groups, threads=threads, allow_open=allow_open)
+        return _groundtruth.ground_truth(scene, gbuffer, **args)
 
     return cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape, "stderr": gbuffer.shape},
                                 info=_scene_info(scene))
 
 
-def screen_reference_cached(gbuffer, scene=None, *, cache, radius, samples: int = 4096,
-                            normal_clamp: bool = False, thickness=None, falloff: str = "constant",
-                            seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-                            groups=None) -> tuple[Estimate, bool]:
+def screen_reference_cached(gbuffer, scene=None, *, cache, **params) -> tuple[Estimate, bool]:
     """:func:`vobscure.vo_reference` (the converged screen-space VO), cached.
+
+    Takes the arguments of :func:`vobscure.vo_reference`, with its defaults (read from its
+    signature), plus ``scene`` and ``cache``.
 
     Parameters
     ----------
     gbuffer : GBuffer
-    scene : Scene, optional
+    scene : Scene, trimesh.Trimesh, str or os.PathLike, optional
         Recorded in the entry's provenance only: the G-buffer alone decides the numbers.
     cache : ReferenceCache or None
         None computes without caching.
-    radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen, groups
-        As in :func:`vobscure.vo_reference`; ``seed`` must be an int and ``samples`` an int
-        (a SamplePattern has no key). ``groups=None`` is the default number of groups.
+    **params
+        The keyword arguments of :func:`vobscure.vo_reference` (``radius``, ``samples``,
+        ``normal_clamp``, ``thickness``, ``falloff``, ``seed``, ``fetch``, ``offscreen``,
+        ``groups``, ``progress``); ``seed`` must be an int and ``samples`` a count (a
+        SamplePattern has no key). All but ``progress`` enter the key, with the defaults
+        filled in.
 
     Returns
     -------
@@ -621,36 +670,47 @@ def screen_reference_cached(gbuffer, scene=None, *, cache, radius, samples: int 
     hit : bool
         True when it came from the cache.
 
+    Raises
+    ------
+    TypeError
+        For a keyword that :func:`vobscure.vo_reference` does not take.
+
     Notes
     -----
     The key holds :func:`gbuffer_digest` of the G-buffer's depth and normal images (in
     their dtype), its camera, the parameters, the seed and the versions.
     """
     from ..gbuffer import GBuffer
-    from ..screenspace import vo_reference
 
     cache = _as_cache(cache)
     if not isinstance(gbuffer, GBuffer):
         raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
-    seed = _seed(seed)
-    radius = check_positive(radius, "radius")
-    samples = check_int(samples, "samples", minimum=2)
-    groups = DEFAULT_GROUPS if groups is None else check_int(groups, "groups", minimum=2)
-    if thickness is not None:
-        thickness = check_positive(thickness, "thickness")
+    args = _with_defaults(_SCREEN_REFERENCE_DEFAULTS, params, "screen_reference_cached", "vobscure.vo_reference")
+    if args["radius"] is inspect.Parameter.empty:
+        raise TypeError("screen_reference_cached() missing the keyword argument 'radius'")
+    args["seed"] = seed = _seed(args["seed"])
+    args["radius"] = check_positive(args["radius"], "radius")
+    args["samples"] = check_int(args["samples"], "samples", minimum=2)
+    args["groups"] = check_int(args["groups"], "groups", minimum=2)
+    if args["thickness"] is not None:
+        args["thickness"] = check_positive(args["thickness"], "thickness")
+    args["normal_clamp"] = bool(args["normal_clamp"])
+    key = {name: (value if value is None or isinstance(value, (bool, int, float)) else str(value))
+           for name, value in args.items() if name not in ("seed", "progress")}
     fields = {"kind": "screen_reference", "quantity": "screen",
               "gbuffer": gbuffer_digest(gbuffer), "camera": gbuffer.camera.to_dict(),
-              "params": {"radius": radius, "samples": samples, "normal_clamp": bool(normal_clamp),
-                         "thickness": thickness, "falloff": str(falloff), "fetch": str(fetch),
-                         "offscreen": str(offscreen), "groups": groups},
-              "seed": seed}
+              "params": key, "seed": seed}
 
     def compute():
-        return vo_reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
-                            thickness=thickness, falloff=falloff, seed=seed, fetch=fetch,
-                            offscreen=offscreen, groups=groups)
+        return _screenspace.vo_reference(gbuffer, **args)
 
-    info = None if scene is None else _scene_info(scene)
-    result, hit = cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape, "stderr": gbuffer.shape},
-                                       info=info)
-    return result, hit
+    info = None if scene is None else _scene_info(as_scene(scene))
+    return cache.get_or_compute(fields, compute, expected={"value": gbuffer.shape, "stderr": gbuffer.shape},
+                                info=info)
+
+
+ground_truth_cached.__signature__ = _cached_signature(
+    _groundtruth.ground_truth, [inspect.Parameter(n, inspect.Parameter.POSITIONAL_OR_KEYWORD) for n in ("scene", "gbuffer")])
+screen_reference_cached.__signature__ = _cached_signature(
+    _screenspace.vo_reference, [inspect.Parameter("gbuffer", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                   inspect.Parameter("scene", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)])

@@ -1,11 +1,15 @@
-"""Scenes: named triangle meshes, procedural builders and file loading."""
+"""Scenes: named triangle meshes, procedural builders, file loading, and the one resolver
+(:func:`as_scene`, :func:`resolve`) of a scene argument."""
 
+from ._resolve import as_scene, resolve
 from ._scene import Scene
 from .io import DegenerateFacesWarning, load
 from .procedural import blob, cornell_box, crease, get, groove, names, slab, sphere_on_plane, steps
 
 __all__ = [
     "Scene",
+    "as_scene",
+    "resolve",
     "load",
     "DegenerateFacesWarning",
     "names",

@@ -239,7 +239,8 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
 
 def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = False,
                  thickness=None, falloff: str = "constant", seed=0, fetch: str = "bilinear",
-                 offscreen: str = "clamp", groups: int = DEFAULT_GROUPS) -> Estimate:
+                 offscreen: str = "clamp", groups: int = DEFAULT_GROUPS,
+                 progress: bool = False) -> Estimate:
     """The converged screen-space VO: dense stratified sampling of the depth-buffer occupancy.
 
     What every screen-space estimator tends to with infinitely many samples (line sampling
@@ -293,6 +294,8 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     groups : int
         Independent randomizations (>= 2; the standard error's degrees of freedom + 1).
         Default :data:`vobscure.estimate.DEFAULT_GROUPS`, as for the ground truth.
+    progress : bool
+        A tqdm progress bar over the groups (default False, as everywhere in vobscure).
 
     Returns
     -------
@@ -316,6 +319,8 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     >>> float(ref.value[4, 4]), float(ref.stderr[4, 4]), ref.samples
     (1.0, 0.0, 256)
     """
+    from tqdm.auto import tqdm
+
     pattern = samples if isinstance(samples, SamplePattern) else None
     if pattern is not None:
         pattern = C.as_pattern(pattern, 3)
@@ -331,7 +336,7 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     else:
         total = g * len(pattern.points)
     mean = M2 = None
-    for k in range(1, g + 1):
+    for k in tqdm(range(1, g + 1), desc="vo_reference", unit="group", disable=not progress, leave=False):
         if pattern is None:
             # stratified: jittered cells of a grid in the unit cube (a random subset of the
             # cells when half is not a cube), mapped volume-preservingly into the ball
