@@ -416,6 +416,7 @@ def test_clamped_line_constant_denominator_for_antipodal_patterns(samples, monke
     assert np.isnan(fast[~valid]).all() and np.isfinite(fast[valid]).all()
     np.testing.assert_allclose(fast[valid], full[valid], rtol=0, atol=1e-12)
 
+
 # ----------------------------------------------------------------------------- vo_reference
 #: Probability that one of the reference's statistical tests below fails although the code is
 #: right (each test splits it over its assertions, Bonferroni).

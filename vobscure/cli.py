@@ -147,7 +147,7 @@ def _figures_main(args) -> int:
     if unknown:
         raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of "
                          f"{', '.join(figures.FIGURES)}")
-    paths = figures.make_all(args.out, quick=args.quick, names=names)
+    paths = figures.make_all(args.out, quick=args.quick, names=names, progress=True)
     for path in paths:
         print(f"wrote {path}")
     return 0

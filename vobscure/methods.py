@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from .estimate import DEFAULT_GROUPS
 from .screenspace import point_taps, vo_area, vo_line, vo_point, vo_reference
 
 __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
@@ -88,9 +89,10 @@ def _one_tap_per_sample(n: int) -> int:
     return int(n)
 
 
-def _antithetic_pairs(n: int) -> int:
-    """vo_reference rounds its samples up to antithetic pairs."""
-    return 2 * -(-int(n) // 2)
+def _reference_taps(n: int) -> int:
+    """vo_reference rounds its samples up to DEFAULT_GROUPS randomizations of antithetic pairs."""
+    per_group = 2 * DEFAULT_GROUPS
+    return per_group * max(1, -(-int(n) // per_group))
 
 
 @dataclass(frozen=True)
@@ -319,5 +321,5 @@ register(Method("line", vo_line, default_samples=9, fetch="nearest",
                 summary="line sampling: exact chords through the ball (Sec. 4.1)"))
 register(Method("area", vo_area, default_samples=1, fetch="bspline", fetch_parameter="reconstruction",
                 summary="area sampling with mip-mapped depth moments (Sec. 4.2)"))
-register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_antithetic_pairs,
+register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_reference_taps,
                 summary="the converged screen-space VO (dense stratified points)", reference_only=True))

@@ -64,6 +64,8 @@ TIMING_RUNS = 3
 SEED_REPEATS = 5
 #: Samples of the converged screen-space reference (full, quick).
 REFERENCE_SAMPLES = {False: 4096, True: 1024}
+#: Points per ball of the world-space VO, the ground truth (full, quick).
+TRUTH_SAMPLES = {False: 1024, True: 256}
 #: Lines of the converged line estimate that a line configuration's own sampling error is
 #: measured against (its limit differs from the reference under perspective; see
 #: ``docs/results.md``).
@@ -230,7 +232,7 @@ def sweep_configs(scene_name: str, *, size=(256, 256), radius=None, seed=0, rays
     from .sweep import SweepConfig
 
     base = dict(scene=scene_name, size=tuple(size), radius=radius, rays=rays,
-                volume_samples=rays if quick else 4 * rays, screen_samples=REFERENCE_SAMPLES[bool(quick)],
+                volume_samples=TRUTH_SAMPLES[bool(quick)], screen_samples=REFERENCE_SAMPLES[bool(quick)],
                 reference_seed=seed)
     out = []
     for normal_clamp in (False, True):
@@ -340,8 +342,8 @@ def line_vs_point(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256,
     ``normal_clamp`` False and True, every configuration of :data:`CONFIGS` (and
     :data:`SUPPLEMENTARY` when asked) is timed (median of :data:`TIMING_RUNS`) and compared
     with :func:`vobscure.vo_reference` (``samples`` 4096, 1024 with ``quick``) and with
-    :func:`vobscure.ground_truth` (``quantity="volumetric"``, ``samples`` 4 ``rays``,
-    ``rays`` with ``quick``), both with the same ``normal_clamp``.
+    :func:`vobscure.ground_truth` (``quantity="volumetric"``, :data:`TRUTH_SAMPLES` points
+    per ball: 1024, 256 with ``quick``), both with the same ``normal_clamp``.
 
     Parameters
     ----------
@@ -355,8 +357,7 @@ def line_vs_point(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256,
         Seed of the estimators' noise textures and of both references.
     rays : int
         Rays per pixel of the ray-cast ambient occlusion within ``radius`` that the
-        ``corr_ao`` column compares with; also sets the ground truth's points per ball
-        (4 ``rays`` = 1024 by default, ``rays`` = 256 with ``quick``).
+        ``corr_ao`` column compares with.
     quick : bool
         Fewer reference samples (for tests and smoke runs).
     supplementary : bool

@@ -165,7 +165,7 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
             normal_clamp: bool = False, thickness=None, references=DEFAULT_REFERENCES, repeats: int = 3,
             rays: int = 256, volume_samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
-            out=None, cache=True, progress: bool = True, plots: bool = True,
+            out=None, cache=True, progress: bool = False, plots: bool = True,
             write: bool = True) -> CompareResult:
     """Measure error, time and taps per pixel of screen-space estimators on one scene, and say
     which to use.
@@ -219,7 +219,7 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     cache : bool, path or ReferenceCache
         True: the default user cache folder; a path: that folder; False: no cache.
     progress : bool
-        Progress bars.
+        Progress bars (off by default, as everywhere in the library; the command turns them on).
     plots : bool
         Write the PNGs.
     write : bool

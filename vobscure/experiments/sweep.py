@@ -28,7 +28,7 @@ Examples
 >>> with ThreadPoolExecutor(1) as pool:
 ...     results = sweep(configs, executor=pool, progress=False)
 >>> [(r.config.label, r.taps_per_pixel, r.errors["screen"].pixels == r.pixels) for r in results]
-[('line 5', 5, True), ('area 1', 1, True)]
+[('line:5', 5, True), ('area:1', 1, True)]
 """
 
 from __future__ import annotations
@@ -492,7 +492,7 @@ def _default_executor(workers: int) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
 
 
-def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, progress: bool = True,
+def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, progress: bool = False,
           cache=None, keep_images: bool = False) -> list[SweepResult]:
     """Run every configuration; one :class:`SweepResult` per configuration, in input order.
 
@@ -506,7 +506,7 @@ def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, p
         pool of :data:`DEFAULT_WORKERS` processes (started with ``forkserver``, or ``spawn``
         where that is missing), shut down at the end. A given executor is left running.
     progress : bool
-        A tqdm progress bar over the configurations.
+        A tqdm progress bar over the configurations (off by default, as everywhere).
     cache : ReferenceCache, optional
         A disk cache for the references (shared by the workers; they must see its folder).
         Default: references live in the workers' memory only.

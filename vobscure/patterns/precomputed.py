@@ -276,7 +276,7 @@ def _families(methods, dims) -> list[tuple[int, str, str]]:
 
 
 def build_tables(directory=None, *, quick: bool = False, methods=METHODS, dims=(2, 3), jobs: int = 1,
-                 seed: int = 0, progress: bool = True) -> list[Path]:
+                 seed: int = 0, progress: bool = False) -> list[Path]:
     """Generate the pattern tables and write one ``.npz`` per family (atomically).
 
     Parameters

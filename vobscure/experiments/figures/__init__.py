@@ -39,7 +39,7 @@ FIGURES = {
 }
 
 
-def make_all(out_dir, quick: bool = False, names=None, *, progress: bool = True) -> list[Path]:
+def make_all(out_dir, quick: bool = False, names=None, *, progress: bool = False) -> list[Path]:
     """Run the ``make`` of each named figure (default: all of :data:`FIGURES`).
 
     Parameters
@@ -51,7 +51,7 @@ def make_all(out_dir, quick: bool = False, names=None, *, progress: bool = True)
     names : iterable of str, optional
         Names of :data:`FIGURES`, run in the order given; default all, in registry order.
     progress : bool, optional
-        A tqdm progress bar over the figures (default on).
+        A tqdm progress bar over the figures (off by default, as everywhere; the command turns it on).
 
     Returns
     -------
