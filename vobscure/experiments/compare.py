@@ -578,7 +578,8 @@ def _tradeoff(path, rows, provenance):
             ax.xaxis.set_minor_formatter(NullFormatter())  # unlabelled minor ticks never overlap
             ax.set_xlabel(label)
             own = any(row["own_reference"] == ref for row in rows)
-            ax.set_ylabel(f"RMSE vs {ref}" + ("" if own or ref == "screen" else " (model error)"))
+            ax.set_ylabel(f"RMSE vs {ref}" + (" (sampling error)" if ref == "screen" and not own else
+                                              "" if own else " (model error)"))
             ax.grid(alpha=0.3)
             if i == 0 and j == 0:
                 ax.legend(fontsize=7)
