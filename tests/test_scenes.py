@@ -704,3 +704,18 @@ def test_scene_arguments_go_through_the_resolver():
     assert e.value[0] == 1.0
     with pytest.raises(ValueError, match="blob, cornell_box"):
         vo.ground_truth("no-such-scene", a)
+
+
+def test_check_spec_validates_without_building(tmp_path, monkeypatch):
+    from vobscure import scenes
+    from vobscure.scenes import _resolve
+
+    monkeypatch.setattr(_resolve, "get", lambda name: pytest.fail("check_spec built a scene"))
+    assert scenes.check_spec("slab") == "slab"
+    assert scenes.check_spec(tmp_path / "far.obj", exists=False) == str(tmp_path / "far.obj")
+    with pytest.raises(FileNotFoundError, match="far.obj"):
+        scenes.check_spec(tmp_path / "far.obj")
+    with pytest.raises(ValueError, match="mesh file"):
+        scenes.check_spec(tmp_path / "notes.txt", exists=False)
+    with pytest.raises(ValueError, match="cornell_box"):
+        scenes.check_spec("nowhere")

@@ -41,7 +41,6 @@ from collections import OrderedDict
 from collections.abc import Iterable, Mapping
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -71,21 +70,11 @@ ERROR_STATS = ("rmse", "mae", "bias", "max_abs", "psnr", "ssim", "pixels")
 
 
 def _scene_spec(scene):
-    """A scene name or path that every worker can resolve, or a Scene (for executors in this
-    process only: a Scene is not sent to other processes)."""
-    from ..scenes import Scene, names
-    from ..scenes.io import SUPPORTED_EXTENSIONS
+    """A scene name or path that every worker can resolve (checked here, built there), or a
+    Scene (for executors in this process only: a Scene is not sent to other processes)."""
+    from ..scenes import Scene, check_spec
 
-    if isinstance(scene, Scene):
-        return scene
-    if isinstance(scene, os.PathLike):
-        scene = os.fspath(scene)
-    if not isinstance(scene, str):
-        raise ValueError(f"scene must be a built-in scene name or a mesh path, got {type(scene).__name__}")
-    if scene in names() or Path(scene).suffix.lower() in SUPPORTED_EXTENSIONS:
-        return scene                 # resolved (built or loaded) in the worker
-    raise ValueError(f"scene must be one of {', '.join(names())} or a mesh file "
-                     f"({', '.join(SUPPORTED_EXTENSIONS)}), got {scene!r}")
+    return scene if isinstance(scene, Scene) else check_spec(scene, exists=False)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from ._scene import Scene
 from .io import SUPPORTED_EXTENSIONS, load
 from .procedural import get, names
 
-__all__ = ["as_scene", "resolve"]
+__all__ = ["as_scene", "check_spec", "resolve"]
 
 #: The name :func:`resolve` gives a scene that is neither built in nor read from a file.
 CUSTOM = "custom"
@@ -66,18 +66,60 @@ def resolve(spec, *, argument: str = "scene") -> tuple[Scene, str]:
         return spec, CUSTOM
     if isinstance(spec, trimesh.Trimesh):
         return Scene(spec), CUSTOM
+    spec = check_spec(spec, argument=argument)
+    if spec in names():
+        return get(spec), spec
+    path = Path(spec).expanduser()
+    return load(path), path.stem
+
+
+def check_spec(spec, *, argument: str = "scene", exists: bool = True) -> str:
+    """A built-in scene's name or a mesh file's path, checked without building or loading it
+    (for scenes that other processes will resolve).
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+    argument : str, optional
+        The argument's name in error messages.
+    exists : bool, optional
+        Require the file to exist here (default). False only checks that the path names a
+        supported mesh format: for a path that other machines (a cluster's workers) will read.
+
+    Returns
+    -------
+    str
+        ``spec`` as a string (a path-like is converted).
+
+    Raises
+    ------
+    ValueError, FileNotFoundError
+        As :func:`resolve`.
+
+    Examples
+    --------
+    >>> check_spec("cornell_box")
+    'cornell_box'
+    >>> check_spec("/data/on/the/workers/bunny.ply", exists=False)
+    '/data/on/the/workers/bunny.ply'
+    """
     if isinstance(spec, os.PathLike):
         spec = os.fspath(spec)
     if not isinstance(spec, str):
         raise ValueError(f"{argument} must be {_accepted()}; got {type(spec).__name__}")
     if spec in names():
-        return get(spec), spec
+        return spec
     path = Path(spec).expanduser()
+    if not exists:
+        if path.suffix.lower() in SUPPORTED_EXTENSIONS:
+            return spec
+        raise ValueError(f"{argument} must be a built-in scene ({', '.join(names())}) or a mesh file "
+                         f"({', '.join(SUPPORTED_EXTENSIONS)}); got {spec!r}")
     if path.suffix or path.exists():
         if not path.exists():
             raise FileNotFoundError(f"{argument} {spec!r} is not a built-in scene ({', '.join(names())}) "
                                     f"and no such mesh file exists")
-        return load(path), path.stem
+        return spec
     raise ValueError(f"{argument} must be {_accepted()}; got {spec!r}, which is neither a built-in "
                      f"name nor a path")
 
