@@ -280,3 +280,21 @@ def test_the_package_attribute_is_the_sweep_function():
         a = vo.experiments.sweep(configs, executor=pool, progress=False)
         b = sweep(configs, executor=pool, progress=False)
     assert a[0].errors["screen"].rmse == b[0].errors["screen"].rmse
+
+
+def test_sky_references_are_unbounded_ao_with_their_weighting():
+    """"sky" / "sky_uniform": ray-cast AO with no distance limit, cosine / uniform weighted --
+    the same numbers as ground_truth called directly, and different from AO within the radius."""
+    from vobscure.experiments.sweep import InlineExecutor
+
+    config = SweepConfig("crease", "line", 5, size=(12, 10), radius=0.2, rays=32,
+                         references=("sky", "sky_uniform", "ao"))
+    (res,) = sweep([config], executor=InlineExecutor(), keep_images=True)
+    gb = res.gbuffer
+    scene = vo.scenes.crease()
+    for name, weighting in (("sky", "cosine"), ("sky_uniform", "uniform")):
+        direct = vo.ground_truth(scene, gb, quantity="ao", radius=None, weighting=weighting, rays=32, seed=0)
+        np.testing.assert_array_equal(res.references[name].value, direct.value)
+    # the floor near the wall sees the wall beyond 0.2: unbounded AO is darker there
+    assert np.nanmean(res.references["sky"].value) < np.nanmean(res.references["ao"].value)
+    assert not np.array_equal(res.references["sky"].value, res.references["sky_uniform"].value)

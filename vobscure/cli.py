@@ -70,8 +70,11 @@ def _parser() -> argparse.ArgumentParser:
                         f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1)")
     c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
     c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")
-    c.add_argument("--reference", nargs="+", default=None, choices=("screen", "volumetric", "ao", "obscurance"),
-                   help="references to compute (default screen volumetric ao)")
+    from .experiments.sweep import REFERENCES
+
+    c.add_argument("--reference", nargs="+", default=None, choices=REFERENCES,
+                   help="references to compute (default screen volumetric ao; sky and sky_uniform: AO with "
+                        "no distance limit, cosine-weighted or uniform, for the vegetation models)")
     c.add_argument("--repeats", type=int, default=3, help="timed runs per configuration, median kept (default 3)")
     c.add_argument("--rays", type=int, default=256, help="rays per pixel of ao/obscurance (default 256)")
     c.add_argument("--volume-samples", "--samples", dest="volume_samples", type=int, default=1024,

@@ -40,8 +40,9 @@ __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "regi
 
 #: Depth texels one tap reads with each fetch: a nearest fetch reads one texel, a bilinear
 #: fetch 2 x 2; ``vo_area``'s mip-map lookup reads two levels of 2 x 2 (trilinear) or 3 x 3
-#: (its default quadratic B-spline) texels.
-TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18}
+#: (its default quadratic B-spline) texels; ``"none"``: an object-space model that reads no
+#: depth buffer.
+TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18, "none": 0}
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,7 @@ QUANTITIES = {
     "ball VO": Quantity("ball VO", "volumetric", normal_clamp=False, screen_limit=True),
     "half-ball VO": Quantity("half-ball VO", "volumetric", normal_clamp=True, screen_limit=True),
     "cosine AO": Quantity("cosine AO", "ao"),
+    "sky visibility": Quantity("sky visibility", "sky"),
     "obscurance": Quantity("obscurance", "obscurance"),
 }
 
@@ -123,6 +125,9 @@ class Method:
     reference_only : bool
         A converged reference rather than an estimator one would ship (left out of the
         default comparisons and of the verdict's choices).
+    needs_scene : bool
+        The function also takes ``scene=`` (an object-space model that reads the scene's
+        description, e.g. a tree's canopy shell), which the experiments pass.
 
     Examples
     --------
@@ -141,6 +146,7 @@ class Method:
     fetch_parameter: str | None = "fetch"
     summary: str = ""
     reference_only: bool = False
+    needs_scene: bool = False
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():

@@ -590,7 +590,7 @@ def _tradeoff(path, rows, provenance):
 def _gallery(path, rows, refs, images, gb):
     radius = rows[0]["radius"]
     ref_imgs = refs[radius]
-    primary = next(n for n in ("volumetric", "screen", "ao", "obscurance") if n in ref_imgs)
+    primary = next(n for n in ("volumetric", "screen", "ao", "obscurance", "sky", "sky_uniform") if n in ref_imgs)
     configs = [row["label"] for row in rows if row["radius"] == radius]
     ncol = max(len(ref_imgs), 4)
     per_row = max(ncol // 2, 1)

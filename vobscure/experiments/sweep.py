@@ -55,7 +55,11 @@ __all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "res
 #: References an estimate can be compared with: the converged screen-space VO
 #: (:func:`vobscure.vo_reference`, same settings as the estimate) and the ray-cast
 #: world-space VO, ambient occlusion within the radius and obscurance (linear falloff).
-REFERENCES = ("screen", "volumetric", "ao", "obscurance")
+REFERENCES = ("screen", "volumetric", "ao", "obscurance", "sky", "sky_uniform")
+#: The ray-cast sky visibility (ambient occlusion with no distance limit), cosine-weighted and
+#: uniform: the references of the vegetation models (Hegeman et al. 2006), whose paper does not
+#: say which of the two its "average probability over directions" means.
+SKY_REFERENCES = {"sky": "cosine", "sky_uniform": "uniform"}
 #: Fields of :meth:`SweepResult.as_row` that are measured times and so differ between runs.
 TIMING_FIELDS = ("seconds", "seconds_runs", "cpu_seconds")
 #: Image size (width, height) when a configuration gives neither size nor camera.
@@ -114,7 +118,9 @@ class SweepConfig:
         Timed runs after the untimed first call; the median is reported. 0: not timed
         (``seconds`` is NaN), for configurations that only measure error.
     references : tuple of str
-        Some of :data:`REFERENCES` (a single name is accepted).
+        Some of :data:`REFERENCES` (a single name is accepted): ``"screen"``,
+        ``"volumetric"``, ``"ao"`` and ``"obscurance"`` (within the radius), ``"sky"`` and
+        ``"sky_uniform"`` (ambient occlusion with no distance limit, cosine-weighted or uniform).
     rays : int
         Rays per pixel of the ray-cast ``ao`` and ``obscurance`` references (directions).
     volume_samples : int
@@ -404,6 +410,8 @@ def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache):
         if name == "volumetric":
             params.update(samples=config.volume_samples, falloff=config.falloff,
                           normal_clamp=config.normal_clamp, allow_open=config.allow_open)
+        elif name in SKY_REFERENCES:
+            params.update(quantity="ao", radius=None, weighting=SKY_REFERENCES[name], rays=config.rays)
         else:
             params.update(rays=config.rays)
 
@@ -426,6 +434,8 @@ def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
     mc = config.method_config
     kwargs = dict(radius=radius, normal_clamp=config.normal_clamp, thickness=config.thickness,
                   falloff=config.falloff, seed=config.seed)
+    if mc.spec.needs_scene:
+        kwargs["scene"] = scene
     timings, values = time_calls({"run": lambda: mc.run(gb, **kwargs)}, config.repeats)
     image = values["run"]
     image = getattr(image, "value", image)      # a Monte Carlo method returns an Estimate
