@@ -1,0 +1,27 @@
+"""Analytic ambient-visibility models of trees (Hegeman et al. 2006).
+
+``shells``: the spheres, ellipsoids and sets of shells that enclose a canopy, and their
+fits to a point cloud; ``canopy``: the canopy visibility of Eqs. 4-6, the Reeves-Blau
+baseline, and the density (alpha rho) fitted to a reference or predicted from leaf
+statistics. See ``docs/trees.md``.
+"""
+
+from .shells import (
+    Ellipsoid,
+    MultiShell,
+    Sphere,
+    bounding_ellipsoid,
+    bounding_sphere,
+    chord_length,
+    shells_from_points,
+)
+
+__all__ = [
+    "Ellipsoid",
+    "MultiShell",
+    "Sphere",
+    "bounding_ellipsoid",
+    "bounding_sphere",
+    "chord_length",
+    "shells_from_points",
+]
