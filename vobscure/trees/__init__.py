@@ -15,6 +15,7 @@ from .shells import (
     chord_length,
     shells_from_points,
 )
+from .canopy import canopy_visibility, fit_density, optical_depth, predict_density, reeves_blau
 
 __all__ = [
     "Ellipsoid",
@@ -22,6 +23,11 @@ __all__ = [
     "Sphere",
     "bounding_ellipsoid",
     "bounding_sphere",
+    "canopy_visibility",
     "chord_length",
+    "fit_density",
+    "optical_depth",
+    "predict_density",
+    "reeves_blau",
     "shells_from_points",
 ]

@@ -1,0 +1,419 @@
+"""Ambient visibility inside a tree's canopy: Hegeman et al. 2006, Sec. 3 (Eqs. 4-6).
+
+A point x with normal n inside a shell of occluders: the plane through x with normal n cuts
+off a spherical cap of height h on the normal's side; the visibility is the probability of
+seeing no occluder in a Poisson field whose mean count is the cap's volume times the density,
+reduced by the off-centre factor f:
+
+    V_cap = pi h^2 (3R - h) / 3             (Eq. 4)
+    f     = h^2 / (h^2 + d^2)               (Eq. 5)
+    V     = exp(-alpha rho f V_cap)         (Eq. 6)
+
+Ellipsoids are mapped to the unit sphere first (points directly, normals by the inverse
+transpose). Also here: the Reeves & Blau 1985 baseline the paper compares with, the density
+alpha*rho fitted to a reference visibility (the "one-time preprocessing step" of Sec. 4), and
+the density predicted from leaf statistics by the Poisson argument of Sec. 3 (derived in
+``docs/trees.md``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from .._validate import as_array, check_int, check_positive
+from .shells import Ellipsoid, MultiShell, Sphere
+
+__all__ = ["canopy_visibility", "reeves_blau", "fit_density", "predict_density", "optical_depth"]
+
+#: Points evaluated at once by ``canopy_visibility``: bounds the temporaries (about
+#: 30 float64 values per point, 15 MiB) whatever the number of points.
+DEFAULT_CHUNK = 1 << 16
+#: Range of the fitted density's search, as optical depths alpha*rho*tau: below
+#: FIT_TAU_MIN the visibility is 1 to 1e-8 everywhere, above FIT_TAU_MAX it is 0 to
+#: exp(-50) at every point that sees the shell at all.
+FIT_TAU_MIN = 1e-8
+FIT_TAU_MAX = 50.0
+#: Gauss-Newton polish of the fitted density: stop once a step is this small relative.
+FIT_RTOL = 1e-14
+FIT_MAX_STEPS = 50
+
+
+# ----------------------------------------------------------------------------- validation
+def _check_shell(shell, name: str = "shell", *, multi: bool = True):
+    kinds = (Sphere, Ellipsoid, MultiShell) if multi else (Sphere, Ellipsoid)
+    if not isinstance(shell, kinds):
+        want = "a Sphere, an Ellipsoid or a MultiShell" if multi else "a Sphere or an Ellipsoid"
+        raise ValueError(f"{name} must be {want}, got {type(shell).__name__}")
+    return shell
+
+
+def _as_raw_points(value, name: str) -> np.ndarray:
+    """(n, 3) numeric array without a copy (finiteness is checked per chunk)."""
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a numeric array: {exc}") from None
+    if arr.dtype.kind not in "fiu":
+        raise ValueError(f"{name} must be a numeric array, got dtype {arr.dtype}")
+    if arr.shape == (3,):
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
+    return arr
+
+
+def _out_dtype(*arrays) -> type:
+    """float32 when every input is float32 (or narrower float), else float64."""
+    return np.float32 if all(a.dtype.kind == "f" and a.dtype.itemsize <= 4 for a in arrays) else np.float64
+
+
+# ----------------------------------------------------------------------------- the model
+def _cap_optical_depth(x: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """f * V_cap in the unit frame (R = 1, c = 0): (m,) float64 in [0, 4 pi / 3]."""
+    n_dot_x = np.einsum("ij,ij->i", n, x)
+    h = np.clip(1.0 - n_dot_x, 0.0, 2.0)                         # h = R - n.(x - c), clamped to [0, 2R]
+    V_cap = np.pi * h * h * (3.0 - h) / 3.0                       # Hegeman 2006, Eq. 4 (R = 1)
+    x_perp = x - n_dot_x[:, None] * n                             # from the disk's centre to x, in the plane
+    d2 = np.einsum("ij,ij->i", x_perp, x_perp)                    # d^2
+    h2 = h * h
+    den = h2 + d2
+    f = np.divide(h2, den, out=np.ones_like(h2), where=den > 0)  # Hegeman 2006, Eq. 5 (f = 1 at h = d = 0)
+    return f * V_cap
+
+
+def _shell_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.ndarray:
+    """f * V_cap in world volume (the unit frame's times ``volume_scale``), float64 (m,)."""
+    x = shell.to_unit(points)
+    n = shell.normals_to_unit(normals)
+    return _cap_optical_depth(x, n) * shell.volume_scale
+
+
+def _chunk_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.ndarray:
+    if not isinstance(shell, MultiShell):
+        return _shell_optical_depth(points, normals, shell)
+    which = shell.assign(points)
+    tau = np.empty(points.shape[0])
+    for i, s in enumerate(shell.shells):
+        sel = which == i
+        if np.any(sel):
+            tau[sel] = _shell_optical_depth(points[sel], normals[sel], s)
+    return tau
+
+
+def _checked_inputs(points, normals, shell, chunk):
+    _check_shell(shell)
+    chunk = check_int(chunk, "chunk")
+    P = _as_raw_points(points, "points")
+    N = _as_raw_points(normals, "normals")
+    if N.shape[0] != P.shape[0]:
+        raise ValueError(f"normals must have one row per point ({P.shape[0]}), got {N.shape[0]}")
+    return P, N, chunk
+
+
+def _chunked_optical_depth(P, N, shell, chunk):
+    """Yield (slice, tau) over chunks of at most ``chunk`` points."""
+    for i in range(0, P.shape[0], chunk):
+        sl = slice(i, min(i + chunk, P.shape[0]))
+        yield sl, _chunk_optical_depth(P[sl], N[sl], shell)
+
+
+def optical_depth(points, normals, shell, *, chunk: int = DEFAULT_CHUNK) -> np.ndarray:
+    """(n,) the exponent of Eq. 6 per unit density: ``f V_cap``, in world volume.
+
+    ``canopy_visibility(..., density=a) == exp(-a * optical_depth(...))``; parameters as
+    there. Float64 whatever the input dtype.
+
+    Examples
+    --------
+    >>> tau = optical_depth([[0.0, 0, 0]], [[0, 1.0, 0]], Sphere((0, 0, 0), 1.0))
+    >>> bool(np.isclose(tau[0], 2 * np.pi / 3))           # f = 1, V_cap = 2 pi R^3 / 3
+    True
+    """
+    P, N, chunk = _checked_inputs(points, normals, shell, chunk)
+    tau = np.empty(P.shape[0])
+    for sl, tau_chunk in _chunked_optical_depth(P, N, shell, chunk):
+        tau[sl] = tau_chunk
+    return tau
+
+
+def canopy_visibility(points, normals, shell, *, density: float, chunk: int = DEFAULT_CHUNK) -> np.ndarray:
+    """Ambient visibility at points of a tree's canopy (Hegeman et al. 2006, Eqs. 4-6).
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Shading points x, world units, finite. A single (3,) point is accepted.
+    normals : (n, 3) float
+        Their normals n (renormalized; zero-length ones are rejected).
+    shell : Sphere, Ellipsoid or MultiShell
+        The canopy's shell. With a MultiShell each point uses the shell with the closest
+        centre (Sec. 5).
+    density : float, keyword-only
+        The paper's alpha*rho product, >= 0, per unit *world* volume (see Notes).
+    chunk : int, keyword-only
+        Points evaluated at once (default ``DEFAULT_CHUNK``); the memory beyond the output is
+        O(chunk) whatever n, so 10^7 points are fine.
+
+    Returns
+    -------
+    (n,) float32 or float64
+        V in [0, 1]: float32 when ``points`` and ``normals`` are both float32 (computed in
+        float64), float64 otherwise. Never NaN.
+
+    Raises
+    ------
+    ValueError
+        Bad shapes, NaN/inf in ``points`` or ``normals``, a zero normal, a negative or
+        non-finite ``density``, or a ``shell`` of another type.
+
+    Notes
+    -----
+    Computed in the shell's unit frame (the affine map taking the shell to the unit sphere,
+    Sec. 3; a sphere's is ``(x - c) / R``), with R = 1 and c = 0 there:
+
+    - ``h = R - n.(x - c)``, clamped to [0, 2R]: 0 when the plane leaves the shell entirely
+      behind the normal (then V = 1), 2R when the whole shell lies on the normal's side.
+    - ``d`` is the distance from x to the foot of the centre's projection on the plane (the
+      centre of the cutting disk), ``|(x - c) - (n.(x - c)) n|``, never clamped; ``f = 1``
+      when ``h = d = 0``.
+    - Points outside the shell follow the same formulas: V = 1 when the plane misses the shell
+      on the normal's side, otherwise the cap (or the whole shell) attenuated by f, which
+      decreases as x moves away sideways. V is continuous in x.
+
+    **Density of an ellipsoid**: V_cap is computed in the unit frame and multiplied by the
+    ellipsoid's volume scale ``a b c`` (the Jacobian of the map), so V_cap is the cap's true
+    world volume and ``density`` is always per unit world volume; an Ellipsoid with three
+    equal radii gives the Sphere's result. ``f`` is the unit frame's (a ratio, unitless).
+
+    Stability: V_cap is in [0, 4 pi / 3] in the unit frame, so the exponent never overflows
+    for finite shells and densities; ``exp`` of a huge exponent underflows quietly to 0, and
+    ``density = 0`` gives exactly 1.
+
+    References
+    ----------
+    Hegeman, Premoze, Ashikhmin, Drettakis 2006, "Approximate ambient occlusion for trees",
+    I3D 2006, Sec. 3, Eqs. 4, 5 and 6, Fig. 1 (the cap), Fig. 3 (several shells, ellipsoid).
+
+    Examples
+    --------
+    >>> s = Sphere((0, 0, 0), 1.0)
+    >>> V = canopy_visibility([[0, 0, 0], [0, 1, 0], [0, 1, 0]], [[0, 1, 0], [0, 1, 0], [0, -1, 0]],
+    ...                       s, density=1.5)
+    >>> V.round(6)                      # centre: exp(-1.5 * 2 pi / 3); top facing out: 1; facing in
+    array([0.043214, 1.      , 0.001867])
+    """
+    density = check_positive(density, "density", allow_zero=True)
+    P, N, chunk = _checked_inputs(points, normals, shell, chunk)
+    out = np.empty(P.shape[0], dtype=_out_dtype(P, N))
+    for sl, tau in _chunked_optical_depth(P, N, shell, chunk):  # tau = f V_cap, world volume
+        with np.errstate(over="ignore", under="ignore"):
+            out[sl] = np.exp(-density * tau)                     # Hegeman 2006, Eq. 6: V = exp(-alpha rho f V_cap)
+    return out
+
+
+def reeves_blau(points, shell, *, k: float) -> np.ndarray:
+    """The baseline: ambient attenuated exponentially with the depth inside the tree.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Shading points, finite.
+    shell : Sphere, Ellipsoid or MultiShell
+        The tree's envelope (with a MultiShell: the shell with the closest centre).
+    k : float, keyword-only
+        Attenuation per unit depth, >= 0 (an ad hoc parameter, unrelated to alpha*rho).
+
+    Returns
+    -------
+    (n,) float32 or float64
+        ``V = exp(-k depth)``; float32 for float32 points.
+
+    Notes
+    -----
+    For a sphere, ``depth = max(R - |x - c|, 0)``: the distance from x to the surface inside,
+    0 outside. For an ellipsoid, depth is measured in the frame where the ellipsoid is the
+    sphere of the same volume (the affine map the canopy model uses, scaled by the
+    equivalent radius ``R_eq = (a b c)^(1/3)``): ``depth = R_eq max(1 - |x'|, 0)`` with x' the
+    unit-frame coordinates. It equals the Euclidean depth for a sphere, is continuous and 0
+    on the surface; it is not the Euclidean distance to an elongated ellipsoid's surface.
+    Reeves & Blau's own depth was likewise a modelling choice (their parameters "are ad hoc",
+    Hegeman 2006, Fig. 4).
+
+    References
+    ----------
+    Reeves & Blau 1985, "Approximate and probabilistic algorithms for shading and rendering
+    structured particle systems", SIGGRAPH 85 (Computer Graphics 19(3)), the ambient term of
+    their tree shading. Hegeman et al. 2006, Sec. 2 and Fig. 4 (the comparison).
+
+    Examples
+    --------
+    >>> reeves_blau([[0, 0, 0], [0, 0.5, 0], [0, 3, 0]], Sphere((0, 0, 0), 1.0), k=2.0).round(6)
+    array([0.135335, 0.367879, 1.      ])
+    """
+    _check_shell(shell)
+    k = check_positive(k, "k", allow_zero=True)
+    P_raw = _as_raw_points(points, "points")
+    P = as_array(P_raw, "points")
+    depth = np.zeros(P.shape[0])
+    if isinstance(shell, MultiShell):
+        which, shells = shell.assign(P), shell.shells
+    else:
+        which, shells = np.zeros(P.shape[0], dtype=int), (shell,)
+    for i, s in enumerate(shells):
+        sel = which == i
+        if np.any(sel):
+            x = s.to_unit(P[sel])
+            depth[sel] = s.equivalent_radius * np.maximum(1.0 - np.linalg.norm(x, axis=1), 0.0)
+    out = np.empty(P.shape[0], dtype=_out_dtype(P_raw))
+    with np.errstate(over="ignore", under="ignore"):
+        out[:] = np.exp(-k * depth)                              # Reeves & Blau 1985: exp(-k depth)
+    return out
+
+
+# ----------------------------------------------------------------------------- density
+def fit_density(points, normals, shell, reference, *, weights=None) -> float:
+    """The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
+
+    Parameters
+    ----------
+    points, normals, shell
+        As in ``canopy_visibility``.
+    reference : (n,) float
+        The reference visibility at each point (a ray-traced AO, say). NaN entries are
+        ignored; inf is rejected.
+    weights : (n,) float or None, keyword-only
+        Non-negative weights of the squared residuals (1 each by default); e.g. 1/stderr^2.
+
+    Returns
+    -------
+    float
+        The density minimizing ``sum w (exp(-density tau) - reference)^2``, >= 0, with
+        ``tau = optical_depth(points, normals, shell)``.
+
+    Raises
+    ------
+    ValueError
+        Shapes that disagree, inf in ``reference``, negative or non-finite ``weights``, or
+        nothing to fit (no point with a finite reference, a positive weight and tau > 0).
+
+    Notes
+    -----
+    One parameter, so it is searched directly: a bounded Brent minimization over
+    ``log(density)`` across the range where the optical depths run from ``FIT_TAU_MIN``
+    (everything open) to ``FIT_TAU_MAX`` (everything closed), which keeps the search
+    well-scaled where visibility is near 0; density 0 is compared as a candidate; then
+    Gauss-Newton steps polish the minimum (quadratic convergence on noise-free data). This is
+    the "simple one-time preprocessing step" that Sec. 4 of the paper leaves as future work.
+
+    References
+    ----------
+    Hegeman et al. 2006, Sec. 4 (alpha*rho chosen by hand; an automatic preprocessing step
+    suggested), Eq. 6.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> s = Sphere((0, 0, 0), 1.0)
+    >>> x = rng.uniform(-0.5, 0.5, (200, 3)); n = rng.normal(size=(200, 3))
+    >>> V = canopy_visibility(x, n, s, density=0.8)
+    >>> round(fit_density(x, n, s, V), 10)
+    0.8
+    """
+    tau = optical_depth(points, normals, shell)
+    v = as_array(reference, "reference", shape=(tau.shape[0],), finite=False)
+    if np.any(np.isinf(v)):
+        raise ValueError("reference must not hold inf (NaN entries are ignored)")
+    if weights is None:
+        w = np.ones_like(tau)
+    else:
+        w = as_array(weights, "weights", shape=(tau.shape[0],))
+        if np.any(w < 0):
+            raise ValueError("weights must be non-negative")
+    use = np.isfinite(v) & (w > 0) & (tau > 0)
+    if not np.any(use):
+        raise ValueError("nothing to fit: no point has a finite reference, a positive weight and a "
+                         "nonzero optical depth (a point whose plane misses the shell has V = 1 whatever the density)")
+    tau, v, w = tau[use], v[use], w[use]
+
+    def loss(a: float) -> float:
+        with np.errstate(under="ignore"):
+            r = np.exp(-a * tau) - v
+        return float(np.sum(w * r * r))
+
+    lo = math.log(FIT_TAU_MIN / tau.max())
+    hi = math.log(FIT_TAU_MAX / tau.min())
+    res = minimize_scalar(lambda s: loss(math.exp(s)), bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-10})
+    a = math.exp(float(res.x))
+    if loss(0.0) < loss(a):
+        a = 0.0
+    for _ in range(FIT_MAX_STEPS):                                # Gauss-Newton on r(a) = exp(-a tau) - v
+        with np.errstate(under="ignore"):
+            e = np.exp(-a * tau)
+        J = -tau * e
+        JJ = float(np.sum(w * J * J))
+        if JJ == 0:
+            break
+        step = -float(np.sum(w * J * (e - v))) / JJ
+        a_new = max(a + step, 0.0)
+        if loss(a_new) > loss(a):
+            break
+        done = abs(a_new - a) <= FIT_RTOL * max(a, a_new)
+        a = a_new
+        if done:
+            break
+    return a
+
+
+def predict_density(n_leaves: float, leaf_area: float, shell) -> float:
+    """The alpha*rho predicted from leaf statistics by the Poisson argument of Sec. 3.
+
+    Parameters
+    ----------
+    n_leaves : float
+        Number of leaves (expected number), > 0, uniformly distributed in the shell.
+    leaf_area : float
+        One-sided area A of one flat leaf, > 0, world units squared.
+    shell : Sphere or Ellipsoid
+        The shell; an ellipsoid is treated as its volume-equivalent sphere,
+        ``R = (a b c)^(1/3)``.
+
+    Returns
+    -------
+    float
+        ``alpha rho = 3 sigma / (2 pi R^2)`` with ``sigma = n A / 2``, ``n = n_leaves / volume``.
+
+    Notes
+    -----
+    Randomly oriented flat leaves of one-sided area A have a mean projected area A / 2
+    (Cauchy's projection formula: a convex body's mean shadow is a quarter of its surface
+    area, here 2A), so the number of leaves crossed along a segment of length L is Poisson
+    with mean ``sigma L``. At the sphere's centre every chord has length R, so the exact
+    transmittance is ``exp(-sigma R)`` in every direction (for any angular weighting); there
+    Eq. 6 has f = 1 and ``V_cap = 2 pi R^3 / 3``. Equating the exponents gives the formula.
+    See ``docs/trees.md`` for the derivation.
+
+    References
+    ----------
+    Hegeman et al. 2006, Sec. 3 (Eq. 6 as a Poisson zero-count probability).
+    Cauchy 1841 (the projection formula; e.g. Santalo 1976, "Integral geometry and geometric
+    probability", Sec. 13.6).
+
+    Examples
+    --------
+    >>> s = Sphere((0, 0, 0), 2.0)
+    >>> a = predict_density(1000, 0.01, s)
+    >>> sigma = 1000 / s.volume * 0.01 / 2
+    >>> bool(np.isclose(canopy_visibility([0, 0, 0], [0, 0, 1], s, density=a)[0], np.exp(-sigma * 2.0)))
+    True
+    """
+    _check_shell(shell, multi=False)
+    n_leaves = check_positive(n_leaves, "n_leaves")
+    A = check_positive(leaf_area, "leaf_area")
+    n = n_leaves / shell.volume                                 # leaves per unit volume
+    sigma = n * A / 2.0                                         # Cauchy: mean projected area A / 2
+    R = shell.equivalent_radius
+    return 3.0 * sigma / (2.0 * math.pi * R * R)                # sigma R = alpha rho * 2 pi R^3 / 3 (Eq. 6, f = 1)
