@@ -29,6 +29,12 @@ class Scene:
         corner's normal is the area-weighted mean of the normals of the faces around that
         vertex that lie within this angle of the triangle's own normal. 0 gives flat
         shading (the geometric normal), which polyhedral scenes such as the slab use.
+    metadata : mapping, optional
+        Facts about how the scene was built that are not geometry, for the models and
+        experiments that use it (for example the leaf statistics of the vegetation scenes,
+        :mod:`vobscure.scenes.vegetation`). Stored as a dict; empty by default. It is not part
+        of the scene's geometry digest, and :meth:`scaled` does not carry it over (its lengths
+        would be wrong).
 
     Attributes
     ----------
@@ -50,6 +56,8 @@ class Scene:
     extent : float
         Length of the bounding-box diagonal: the scene's length scale, which every
         epsilon in the library is relative to.
+    metadata : dict
+        See Parameters.
 
     Examples
     --------
@@ -62,7 +70,7 @@ class Scene:
     """
 
     def __init__(self, meshes, *, name: str | None = None, view: Mapping | None = None,
-                 smooth_angle: float | Mapping = 60.0):
+                 smooth_angle: float | Mapping = 60.0, metadata: Mapping | None = None):
         if isinstance(meshes, trimesh.Trimesh):
             meshes = {"mesh": meshes}
         if not isinstance(meshes, Mapping) or not meshes:
@@ -102,6 +110,9 @@ class Scene:
         if not self.extent > 0:
             raise ValueError("the scene's triangles span no volume (all vertices coincide)")
         self._view = dict(view) if view is not None else None
+        if metadata is not None and not isinstance(metadata, Mapping):
+            raise ValueError(f"metadata must be a mapping or None, got {type(metadata).__name__}")
+        self.metadata: dict = dict(metadata) if metadata is not None else {}
 
     def __repr__(self) -> str:
         return (f"Scene({self.name!r}, meshes={list(self.meshes)}, triangles={len(self.triangles)}, "

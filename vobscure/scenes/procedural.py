@@ -22,6 +22,7 @@ import trimesh
 
 from .._validate import as_rng, check_int, check_positive
 from ._scene import Scene
+from .vegetation import grass, leaf_cloud, leaf_cloud_dense, tree, tree_poplar
 
 __all__ = [
     "slab",
@@ -576,17 +577,26 @@ _BUILDERS = {
     "slab": slab,
     "sphere_on_plane": sphere_on_plane,
     "steps": steps,
+    # vegetation (open, two-sided foliage; vobscure.scenes.vegetation)
+    "grass": grass,
+    "leaf_cloud": leaf_cloud,
+    "leaf_cloud_dense": leaf_cloud_dense,
+    "tree": tree,
+    "tree_poplar": tree_poplar,
 }
 
 
 def names() -> list[str]:
-    """Sorted names of the procedural scenes that :func:`get` builds.
+    """Sorted names of the procedural scenes that :func:`get` builds: the closed solids of
+    this module and the vegetation scenes of :mod:`vobscure.scenes.vegetation` (``grass``,
+    ``leaf_cloud``, ``leaf_cloud_dense``, ``tree``, ``tree_poplar``), whose foliage is open.
 
     Examples
     --------
     >>> from vobscure.scenes import names
-    >>> names()
-    ['blob', 'cornell_box', 'crease', 'groove', 'slab', 'sphere_on_plane', 'steps']
+    >>> names()  # doctest: +NORMALIZE_WHITESPACE
+    ['blob', 'cornell_box', 'crease', 'grass', 'groove', 'leaf_cloud', 'leaf_cloud_dense', 'slab',
+     'sphere_on_plane', 'steps', 'tree', 'tree_poplar']
     """
     return sorted(_BUILDERS)
 
