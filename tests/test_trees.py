@@ -160,9 +160,13 @@ def test_unit_maps():
 
 
 # ----------------------------------------------------------------------------- shells: fits
-def test_bounding_sphere_is_minimal():
+@pytest.mark.parametrize("cloud", ["gaussian", "shell"])
+def test_bounding_sphere_is_minimal(cloud):
     rng = np.random.default_rng(0)
-    P = rng.normal(size=(3000, 3)) * [3, 1, 0.5]
+    if cloud == "gaussian":
+        P = rng.normal(size=(3000, 3)) * [3, 1, 0.5]
+    else:                                   # many points near the sphere: no slack goes unnoticed
+        P = _unit(rng.normal(size=(3000, 3))) * rng.uniform(0.97, 1.0, (3000, 1)) * [1.0, 0.9, 0.95]
     s = bounding_sphere(P)
     assert s.contains(P).all()
     # optimality certificate (independent of the algorithm): a ball enclosing P is the
@@ -316,12 +320,12 @@ def test_h_limits_are_continuous():
 def test_density_zero_is_exactly_one_and_huge_is_zero():
     rng = np.random.default_rng(0)
     s = Ellipsoid((0, 0, 0), (1e-3, 2e5, 7.0), _rotation(1))
-    x = rng.normal(size=(500, 3)) * [1e-3, 1e5, 3]
+    x = (rng.normal(size=(500, 3)) * [1e-3, 1e5, 3] * 0.5) @ s.rotation.T
     n = rng.normal(size=(500, 3))
     assert np.all(canopy_visibility(x, n, s, density=0.0) == 1.0)
-    V = canopy_visibility(x, n, s, density=1e300)       # warnings are errors in this suite
+    V = canopy_visibility(x, n, s, density=1e308)       # overflows to inf: warnings are errors here
     assert np.all(np.isfinite(V)) and np.all((V == 0) | (V == 1))
-    assert np.any(V == 0)
+    assert np.mean(V == 0) > 0.5
     V_tiny = canopy_visibility(x, n, s, density=1e-300)
     assert np.all(np.isfinite(V_tiny)) and np.all(V_tiny <= 1)
 
