@@ -16,6 +16,7 @@ from .shells import (
     shells_from_points,
 )
 from .canopy import canopy_visibility, fit_density, optical_depth, predict_density, reeves_blau
+from .occluders import grass_visibility, occluder_visibility, sphere_occlusion
 
 __all__ = [
     "Ellipsoid",
@@ -30,4 +31,7 @@ __all__ = [
     "predict_density",
     "reeves_blau",
     "shells_from_points",
+    "grass_visibility",
+    "occluder_visibility",
+    "sphere_occlusion",
 ]
