@@ -147,7 +147,7 @@ def test_help_lists_the_registry(capsys):
         main(["compare", "--help"])
     out = capsys.readouterr().out
     for name in vo.methods.names():
-        assert f"\n  {name} (default" in out
+        assert f"\n  {name} (" in out
 
 
 # --------------------------------------------------------------------------- the verdict

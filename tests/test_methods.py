@@ -22,9 +22,9 @@ def gb():
 
 
 def test_names_and_unknown_name_lists_them():
-    assert methods.names() == ("point", "line", "area", "reference")
-    assert methods.names(include_references=False) == ("point", "line", "area")
-    with pytest.raises(ValueError, match="unknown method 'gtao'; expected one of point, line, area, reference"):
+    assert methods.names() == ("point", "line", "area", "reference", "hegeman", "hegeman_ellipsoid")
+    assert methods.names(include_references=False) == ("point", "line", "area", "hegeman", "hegeman_ellipsoid")
+    with pytest.raises(ValueError, match="unknown method 'gtao'; expected one of point, line, area, reference, hegeman"):
         methods.get("gtao")
 
 
@@ -48,7 +48,7 @@ def test_parse_errors(spec, match):
 
 
 def test_quantity_and_reference():
-    for name in methods.names():
+    for name in ("point", "line", "area", "reference"):
         m = methods.get(name)
         assert m.quantity(False) == "ball VO" and m.quantity(True) == "half-ball VO"
         assert m.reference(False) == m.reference(True) == "volumetric"
@@ -144,3 +144,57 @@ def test_a_registered_method_runs_in_compare():
     assert rows["twice:4"]["screen_bias"] - rows["line:5"]["screen_bias"] == pytest.approx(
         float(np.nanmean(twice - line)), abs=1e-12)
     assert np.nanmean(twice - line) > 0.3
+    for name in ("hegeman", "hegeman_ellipsoid"):
+        m = methods.get(name)
+        assert m.quantity(True) == "sky visibility" and m.reference() == "sky"
+        assert m.taps(1) == 0 and m.texels(1) == 0 and m.needs_scene
+
+
+# --------------------------------------------------------------------------- vegetation models
+def test_hegeman_per_pixel_is_the_canopy_model_at_the_pixels():
+    from vobscure import trees
+    from vobscure.trees.pixels import canopy_shell, scene_density
+
+    scene = vo.scenes.get("leaf_cloud")
+    gb = vo.render_gbuffer(scene, scene.camera((24, 24)))
+    got = methods.Config("hegeman", 1).run(gb, radius=0.1, scene=scene)
+    shell = canopy_shell(scene)
+    v = trees.canopy_visibility(gb.world_position[gb.valid], gb.world_normal[gb.valid], shell,
+                                density=scene_density(scene, shell))
+    np.testing.assert_array_equal(got[gb.valid], v)
+    assert np.isnan(got[~gb.valid]).all() and (~gb.valid).any()
+
+
+def test_hegeman_ground_pixels_use_the_occluder_model():
+    from vobscure.trees.pixels import hegeman_gbuffer
+
+    scene = vo.scenes.get("tree")
+    gb = vo.render_gbuffer(scene, scene.camera((32, 32)))
+    names = list(scene.meshes)
+    ground = gb.valid.copy()
+    ground[gb.valid] = scene.mesh_index[gb.primitive[gb.valid]] == names.index("ground")
+    assert ground.any() and (gb.valid & ~ground).any()
+    eqs78 = hegeman_gbuffer(gb, scene=scene)
+    porous = hegeman_gbuffer(gb, scene=scene, ground="porous")
+    # the tree's own pixels do not depend on the ground model; the ground's do
+    np.testing.assert_array_equal(eqs78[gb.valid & ~ground], porous[gb.valid & ~ground])
+    assert not np.array_equal(eqs78[ground], porous[ground])
+    # Eq. 8 never darkens below 1/2 (a hemisphere's solid angle at most), and is < 1 under the tree
+    assert eqs78[ground].min() >= 0.5 and eqs78[ground].min() < 1.0
+
+
+def test_compare_on_a_vegetation_scene_runs_the_models_against_the_sky():
+    res = vo.experiments.compare.compare("leaf_cloud", size=(16, 16), quick=True, cache=False,
+                                         write=False, suggest=False)
+    assert res.provenance["references"] == ["screen", "ao", "sky"]     # open leaves: no world VO
+    rows = {r["label"]: r for r in res.rows}
+    assert rows["hegeman"]["own_reference"] == "sky" and rows["hegeman"]["taps_per_pixel"] == 0
+    assert rows["line:9"]["own_reference"] == "screen"                # no world-space VO here
+    refs = {(g["reference"], g["error"]) for g in res.summary["groups"]}
+    assert ("sky", "own_rmse") in refs and ("screen", "own_rmse") in refs
+    # the canopy model is not ranked against the screen-space VO, a different quantity
+    screen = next(g for g in res.summary["groups"] if g["reference"] == "screen")
+    assert not any(label.startswith("hegeman") for label in screen["front_time"] + screen["front_taps"])
+    with pytest.raises(ValueError, match="no canopy"):
+        vo.experiments.compare.compare("slab", size=(8, 8), methods="hegeman", references=("sky",),
+                                       quick=True, cache=False, write=False)

@@ -67,14 +67,16 @@ def _parser() -> argparse.ArgumentParser:
                    help="one or more ball radii (default 0.1 x the scene extent)")
     c.add_argument("--methods", default=None,
                    help="comma-separated NAME[:SAMPLES[:FETCH]] with NAME one of "
-                        f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1)")
+                        f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1, plus hegeman,hegeman_ellipsoid on a "
+                        "vegetation scene)")
     c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
     c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")
     from .experiments.sweep import REFERENCES
 
     c.add_argument("--reference", nargs="+", default=None, choices=REFERENCES,
-                   help="references to compute (default screen volumetric ao; sky and sky_uniform: AO with "
-                        "no distance limit, cosine-weighted or uniform, for the vegetation models)")
+                   help="references to compute (default screen volumetric ao; volumetric left out for a scene "
+                        "that is not closed, sky added for a vegetation scene; sky and sky_uniform: AO with "
+                        "no distance limit, cosine-weighted or uniform, what the vegetation models estimate)")
     c.add_argument("--repeats", type=int, default=3, help="timed runs per configuration, median kept (default 3)")
     c.add_argument("--rays", type=int, default=256, help="rays per pixel of ao/obscurance (default 256)")
     c.add_argument("--volume-samples", "--samples", dest="volume_samples", type=int, default=1024,
@@ -120,15 +122,14 @@ def _camera_arg(spec: str, size):
 
 
 def _compare_main(args) -> int:
-    from .experiments.compare import (DEFAULT_METHODS, DEFAULT_REFERENCES, DEFAULT_SIZE, QUICK_SIZE, compare,
-                                      report_text)
+    from .experiments.compare import DEFAULT_SIZE, QUICK_SIZE, compare, report_text
 
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else DEFAULT_SIZE)
     camera = _camera_arg(args.camera, size) if args.camera else None
     cache = False if args.no_cache else (args.cache if args.cache is not None else True)
     result = compare(args.scene, camera=camera, size=size, radii=args.radius,
-                     methods=args.methods or DEFAULT_METHODS, normal_clamp=args.normals,
-                     thickness=args.thickness, references=tuple(args.reference or DEFAULT_REFERENCES),
+                     methods=args.methods, normal_clamp=args.normals, thickness=args.thickness,
+                     references=tuple(args.reference) if args.reference else None,
                      repeats=args.repeats, rays=args.rays, volume_samples=args.volume_samples,
                      screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit,
                      target_rmse=args.target_rmse, budget_ms=args.budget_ms, suggest=args.suggest,

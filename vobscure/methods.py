@@ -19,7 +19,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference')
+('point', 'line', 'area', 'reference', 'hegeman', 'hegeman_ellipsoid')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 from .estimate import DEFAULT_GROUPS
 from .screenspace import point_taps, vo_area, vo_line, vo_point, vo_reference
+from .trees.pixels import hegeman_gbuffer
 
 __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
            "parse", "unregister"]
@@ -116,8 +117,9 @@ class Method:
         ``taps(n) -> int``: depth-buffer taps per pixel with ``n`` samples.
     quantity : callable
         ``quantity(normal_clamp) -> str``: a key of :data:`QUANTITIES`.
-    samples : str
-        The keyword of ``function`` that counts samples.
+    samples : str or None
+        The keyword of ``function`` that counts samples; None for a model without samples
+        (the count of its configurations is then 1 and is not passed).
     fetch_parameter : str or None
         The keyword of ``function`` that selects the fetch (None: fixed).
     summary : str
@@ -142,7 +144,7 @@ class Method:
     fetch: str
     taps: Callable[[int], int] = _one_tap_per_sample
     quantity: Callable[..., str] = _vo_quantity
-    samples: str = "samples"
+    samples: str | None = "samples"
     fetch_parameter: str | None = "fetch"
     summary: str = ""
     reference_only: bool = False
@@ -169,7 +171,8 @@ class Method:
     def run(self, gbuffer, samples: int | None = None, *, fetch: str | None = None, **kwargs):
         """Call the function with ``samples`` (default :attr:`default_samples`) and, when
         given, another ``fetch``; other keywords are passed on."""
-        kwargs[self.samples] = self.default_samples if samples is None else samples
+        if self.samples is not None:
+            kwargs[self.samples] = self.default_samples if samples is None else samples
         if fetch is not None:
             if self.fetch_parameter is None:
                 raise ValueError(f"method {self.name!r} has a fixed fetch; got fetch={fetch!r}")
@@ -213,7 +216,9 @@ def describe() -> str:
     """One line per registered method, for ``--help`` and error messages."""
     lines = []
     for m in _REGISTRY.values():
-        lines.append(f"{m.name} (default {m.default_samples} samples, {m.fetch} fetch): {m.summary}")
+        cost = ("object space, no samples" if m.samples is None
+                else f"default {m.default_samples} samples, {m.fetch} fetch")
+        lines.append(f"{m.name} ({cost}): {m.summary}")
     return "\n".join(lines)
 
 
@@ -252,6 +257,8 @@ class Config:
 
     @property
     def label(self) -> str:
+        if self.spec.samples is None:
+            return self.method
         base = f"{self.method}:{self.samples}"
         return base if self.fetch is None else f"{base}:{self.fetch}"
 
@@ -289,7 +296,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, hegeman, hegeman_ellipsoid
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
@@ -329,3 +336,28 @@ register(Method("area", vo_area, default_samples=1, fetch="bspline", fetch_param
                 summary="area sampling with mip-mapped depth moments (Sec. 4.2)"))
 register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_reference_taps,
                 summary="the converged screen-space VO (dense stratified points)", reference_only=True))
+
+
+def _no_taps(n: int) -> int:
+    """An object-space model reads no depth buffer."""
+    return 0
+
+
+def _sky_visibility(normal_clamp: bool = False) -> str:
+    """The vegetation models estimate the visibility of the whole sky (AO with no limit)."""
+    return "sky visibility"
+
+
+def _hegeman_ellipsoid(gbuffer, **kwargs):
+    """Hegeman et al. 2006 with the canopy's minimum-volume enclosing ellipsoid (Sec. 3, Fig. 8)."""
+    return hegeman_gbuffer(gbuffer, shell="ellipsoid", **kwargs)
+
+
+register(Method("hegeman", hegeman_gbuffer, default_samples=1, fetch="none", fetch_parameter=None,
+                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
+                summary="Hegeman et al. 2006: canopy sphere (Eqs. 4-6) and ground occluder (Eqs. 7-8); "
+                        "vegetation scenes only"))
+register(Method("hegeman_ellipsoid", _hegeman_ellipsoid, default_samples=1, fetch="none", fetch_parameter=None,
+                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
+                summary="Hegeman et al. 2006 with an ellipsoidal canopy shell (Sec. 3, Fig. 8); vegetation "
+                        "scenes only"))

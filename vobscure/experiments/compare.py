@@ -48,6 +48,8 @@ __all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front",
 #: The paper's Table 1 configurations (Loos & Sloan 2010): points 12 and 33, lines 5 and 9, area 1.
 DEFAULT_METHODS = "point:12,point:33,line:5,line:9,area:1"
 DEFAULT_REFERENCES = ("screen", "volumetric", "ao")
+#: Added to the default methods on a vegetation scene: the models of Hegeman et al. 2006.
+VEGETATION_METHODS = "hegeman,hegeman_ellipsoid"
 #: Sizes of the default and the quick run.
 DEFAULT_SIZE = (256, 256)
 QUICK_SIZE = (64, 64)
@@ -161,8 +163,8 @@ def _row(result, metrics=METRICS) -> dict:
     return row
 
 
-def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=DEFAULT_METHODS,
-            normal_clamp: bool = False, thickness=None, references=DEFAULT_REFERENCES, repeats: int = 3,
+def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=None,
+            normal_clamp: bool = False, thickness=None, references=None, repeats: int = 3,
             rays: int = 256, volume_samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
             out=None, cache=True, progress: bool = False, plots: bool = True,
@@ -180,16 +182,20 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
         (width, height); default 256 x 256 (64 x 64 with ``quick``).
     radii : sequence of float, optional
         Ball radii; default 0.1 x the scene's extent.
-    methods : str or sequence
+    methods : str or sequence, optional
         Configurations of the method registry, ``"NAME:SAMPLES[:FETCH]"`` comma-separated;
-        default the paper's Table 1, ``"point:12,point:33,line:5,line:9,area:1"``.
+        default the paper's Table 1, ``"point:12,point:33,line:5,line:9,area:1"``, and on a
+        vegetation scene (one whose ``metadata`` holds a canopy) also :data:`VEGETATION_METHODS`.
     normal_clamp : bool
         Half-ball VO (Loos & Sloan 2010, Sec. 4.4) for every estimator and VO reference.
     thickness : float, optional
         The thickness model (Sec. 4.3) of every estimator and of the screen-space reference.
-    references : sequence of {"screen", "volumetric", "ao", "obscurance"}
-        Only these are computed. The error decomposition needs "screen" and "volumetric"
-        (its model term also "ao").
+    references : sequence of str, optional
+        Some of :data:`~vobscure.experiments.sweep.REFERENCES`; only these are computed.
+        Default ``("screen", "volumetric", "ao")``; on a scene that is not closed without
+        ``"volumetric"`` (the world-space VO needs an inside test), and on a vegetation scene
+        with ``"sky"`` (what the vegetation models estimate). The error decomposition needs
+        "screen" and "volumetric" (its model term also "ao").
     repeats : int
         Timed runs per configuration; the median is kept.
     rays : int
@@ -247,7 +253,14 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     """
     from ..scenes import resolve
 
+    sc, scene_name = resolve(scene)
+    vegetation = "canopy_points" in (getattr(sc, "metadata", None) or {})
+    if methods is None:
+        methods = DEFAULT_METHODS + ("," + VEGETATION_METHODS if vegetation else "")
     configs = parse_methods(methods)
+    if references is None:
+        references = tuple(r for r in DEFAULT_REFERENCES if r != "volumetric" or sc.is_watertight)
+        references += ("sky",) if vegetation else ()
     references = tuple(references)
     if not references:
         raise ValueError("references must name at least one of " + ", ".join(REFERENCES))
@@ -265,7 +278,6 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
         repeats, rays = 1, min(rays, 64)
         volume_samples, screen_samples = min(volume_samples, 256), min(screen_samples, 512)
         orbit = min(orbit, 4) if orbit else 0
-    sc, scene_name = resolve(scene)
     if camera is None:
         size = tuple(size) if size is not None else (QUICK_SIZE if quick else DEFAULT_SIZE)
         camera = sc.camera(size)
@@ -406,11 +418,15 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
     # reference, and -- for estimators whose limit is the converged screen-space VO -- against
     # that as well, which isolates the sampling error the choice of estimator controls
     keys = {(r["own_reference"], r["radius"], "own_rmse") for r in shippable if r.get("own_reference")}
-    keys |= {("screen", r["radius"], "screen_rmse") for r in shippable
-             if r.get("own_reference") not in (None, "screen") and np.isfinite(r.get("screen_rmse", np.nan))}
+    def screen_limited(r):
+        q = r.get("quantity")
+        return r.get("own_reference") not in (None, "screen") and np.isfinite(r.get("screen_rmse", np.nan)) \
+            and (q is None or _methods.QUANTITIES[q].screen_limit)
+
+    keys |= {("screen", r["radius"], "screen_rmse") for r in shippable if screen_limited(r)}
     for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", REFERENCES.index(k[0]))):
         sel = [r for r in shippable if r["radius"] == radius and np.isfinite(r.get(col, np.nan))
-               and (r.get("own_reference") == ref if col == "own_rmse" else True)]
+               and (r.get("own_reference") == ref if col == "own_rmse" else screen_limited(r))]
         if not sel:
             continue
         err = np.array([r[col] for r in sel])

@@ -1,0 +1,154 @@
+"""The vegetation models per pixel of a G-buffer: what ``vobscure compare --scene tree`` runs
+beside the screen-space estimators.
+
+A vegetation scene (:mod:`vobscure.scenes.vegetation`) records its leaf statistics in
+``scene.metadata``; from them :func:`canopy_shell` fits the shell of Hegeman et al. (2006,
+Sec. 3) and :func:`scene_density` predicts its density alpha*rho (:func:`predict_density`).
+:func:`hegeman_gbuffer` then shades every covered pixel as the paper does: points of the tree
+(leaves, wood) by the canopy model (Eqs. 4-6), points of the ground by the occluder model of
+the canopy's bounding sphere (Eqs. 7-8, or the ``"exact"`` / ``"porous"`` variants of
+:func:`occluder_visibility`). Both estimate sky visibility (ambient occlusion with no distance
+limit), the ``"sky"`` reference of the experiments.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+from .canopy import canopy_visibility, predict_density
+from .occluders import occluder_visibility
+from .shells import MultiShell, bounding_ellipsoid, bounding_sphere, shells_from_points
+
+__all__ = ["canopy_shell", "scene_density", "hegeman_gbuffer", "SHELL_KINDS", "GROUND_MESH"]
+
+#: Shells :func:`canopy_shell` fits: one sphere, one ellipsoid, or k-means spheres.
+SHELL_KINDS = ("sphere", "ellipsoid", "multishell")
+#: The name of the ground mesh in the vegetation scenes (its pixels get the occluder model).
+GROUND_MESH = "ground"
+
+
+def _canopy_points(scene) -> np.ndarray:
+    meta = getattr(scene, "metadata", None) or {}
+    if "canopy_points" not in meta:
+        raise ValueError(f"scene {getattr(scene, 'name', scene)!r} has no canopy: the vegetation models need a "
+                         f"scene of vobscure.scenes.vegetation (leaf_cloud, tree, ...) whose metadata holds "
+                         f"'canopy_points'")
+    return np.asarray(meta["canopy_points"], dtype=np.float64)
+
+
+_SHELLS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def canopy_shell(scene, *, kind: str = "sphere", k: int = 3, seed=0):
+    """The shell enclosing a vegetation scene's leaves (``metadata["canopy_points"]``).
+
+    Parameters
+    ----------
+    scene : Scene
+        A vegetation scene.
+    kind : {"sphere", "ellipsoid", "multishell"}
+        The minimal enclosing sphere (Sec. 3), the minimum-volume enclosing ellipsoid (Sec. 3,
+        Fig. 8), or ``k`` spheres by k-means (Sec. 5, Fig. 3 left).
+    k, seed : int
+        For ``"multishell"``.
+
+    Examples
+    --------
+    >>> from vobscure import scenes
+    >>> shell = canopy_shell(scenes.get("leaf_cloud"))
+    >>> bool(0.9 < shell.radius <= 1.1)
+    True
+    """
+    if kind not in SHELL_KINDS:
+        raise ValueError(f"kind must be one of {', '.join(SHELL_KINDS)}, got {kind!r}")
+    # the fit is the paper's precomputation: once per scene, kind and k
+    key = (kind, int(k), seed if isinstance(seed, int) else id(seed))
+    cached = _SHELLS.setdefault(scene, {})
+    if key not in cached:
+        points = _canopy_points(scene)
+        if kind == "sphere":
+            cached[key] = bounding_sphere(points)
+        elif kind == "ellipsoid":
+            cached[key] = bounding_ellipsoid(points)
+        else:
+            cached[key] = shells_from_points(points, k, kind="sphere", seed=seed)
+    return cached[key]
+
+
+def scene_density(scene, shell) -> float:
+    """alpha*rho of Eq. 6 predicted from the scene's leaf statistics (``n_leaves``,
+    ``leaf_area``) by :func:`predict_density` for ``shell``; for a multishell, the density
+    predicted for the bounding sphere of all the leaves is used for every shell (the leaves
+    are not attributed to shells).
+
+    Examples
+    --------
+    >>> from vobscure import scenes
+    >>> scene = scenes.get("leaf_cloud")
+    >>> scene_density(scene, canopy_shell(scene)) > 0
+    True
+    """
+    meta = scene.metadata
+    if isinstance(shell, MultiShell):
+        shell = bounding_sphere(_canopy_points(scene))
+    return predict_density(meta["n_leaves"], meta["leaf_area"], shell)
+
+
+def hegeman_gbuffer(gbuffer, *, scene, shell: str = "sphere", ground: str = "hegeman", density=None,
+                    k: int = 3, radius=None, normal_clamp: bool = False, thickness=None,
+                    falloff: str = "constant", seed=0) -> np.ndarray:
+    """Hegeman et al. (2006) sky visibility at every covered pixel of a G-buffer.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        Of ``scene``.
+    scene : Scene
+        A vegetation scene (its ``metadata`` and its ``"ground"`` mesh).
+    shell : {"sphere", "ellipsoid", "multishell"}
+        The canopy shell (:func:`canopy_shell`).
+    ground : {"hegeman", "exact", "porous"}
+        The occluder model of ground pixels (:func:`occluder_visibility`), the canopy's
+        bounding sphere as occluder; ``"porous"`` with the extinction that matches
+        ``density`` (``sigma = 2 pi R^2 alpha_rho / 3``).
+    density : float, optional
+        alpha*rho; default :func:`scene_density` (predicted from the leaves, no fitting).
+    k : int
+        Shells of ``"multishell"``.
+    radius, normal_clamp, thickness, falloff, seed
+        Accepted for the estimators' common signature and not used: the model has no radius
+        (it estimates visibility of the whole sky) and is deterministic.
+
+    Returns
+    -------
+    (H, W) float64
+        Visibility, NaN on background.
+
+    References
+    ----------
+    Hegeman, Premoze, Ashikhmin & Drettakis, "Approximate Ambient Occlusion For Trees",
+    I3D 2006, Sec. 3, Eqs. 4-8.
+    """
+    H, W = gbuffer.valid.shape
+    out = np.full((H, W), np.nan)
+    valid = gbuffer.valid
+    if not valid.any():
+        return out
+    canopy = canopy_shell(scene, kind=shell, k=k)
+    alpha_rho = scene_density(scene, canopy) if density is None else float(density)
+    x = np.asarray(gbuffer.world_position, dtype=np.float64)[valid]
+    n = np.asarray(gbuffer.world_normal, dtype=np.float64)[valid]
+    names = list(scene.meshes)
+    mesh = scene.mesh_index[np.asarray(gbuffer.primitive)[valid]]
+    on_ground = (mesh == names.index(GROUND_MESH)) if GROUND_MESH in names else np.zeros(len(x), bool)
+    v = np.empty(len(x))
+    if (~on_ground).any():
+        v[~on_ground] = canopy_visibility(x[~on_ground], n[~on_ground], canopy, density=alpha_rho)
+    if on_ground.any():
+        sphere = bounding_sphere(_canopy_points(scene))
+        sigma = 2.0 * np.pi * sphere.radius ** 2 * alpha_rho / 3.0 if ground == "porous" else None
+        v[on_ground] = occluder_visibility(x[on_ground], n[on_ground], sphere, model=ground, sigma=sigma)
+    out[valid] = v
+    return out
