@@ -19,7 +19,8 @@ from pathlib import Path
 
 __all__ = ["FIGURES", "make_all", "conventions", "screenspace_claims", "fig4_noise", "fig5_thickness",
            "fig6_normals", "fig7_lines_vs_points", "fig8_dual_radii", "table1_timings",
-           "error_decomposition", "temporal_stability", "patterns_quality"]
+           "error_decomposition", "temporal_stability", "patterns_quality", "hegeman_fig2", "hegeman_fig8",
+           "hegeman_fig9", "hegeman_fig10", "hegeman_tradeoff"]
 
 #: Figure name -> module name in this package, in the order :func:`make_all` runs them.
 #: Figures 5-7 share the measurements of :func:`vobscure.experiments.claims.measurement`
@@ -36,6 +37,11 @@ FIGURES = {
     "error_decomposition": "error_decomposition",
     "temporal_stability": "temporal_stability",
     "patterns_quality": "patterns_quality",
+    "hegeman_fig2": "hegeman_fig2",
+    "hegeman_fig8": "hegeman_fig8",
+    "hegeman_fig9": "hegeman_fig9",
+    "hegeman_fig10": "hegeman_fig10",
+    "hegeman_tradeoff": "hegeman_tradeoff",
 }
 
 

@@ -1,0 +1,173 @@
+"""The measurements of Hegeman et al. 2006's models (vobscure.experiments.trees), in quick mode:
+documented columns, and statistical sanity that can fail."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from vobscure.experiments import trees as X
+
+#: Seed of every quick measurement here (the rows are cached per process, so the figures'
+#: quick runs in the same session reuse them).
+SEED = 0
+#: The ray cast's RMSE at r rays against its own reported standard error: their ratio must lie
+#: within this factor of 1 (the RMSE is over few points, and the stderr of a 4-ray estimate
+#: has 3 degrees of freedom, so the band is wide; a wrong seed handling or a reference that
+#: shares the estimate's samples gives a ratio near 0, a broken estimator one far above 1).
+STDERR_RATIO_BAND = (0.6, 1.6)
+#: Exponent b of RMSE ~ rays^b fitted over the swept counts: plain Monte Carlo gives -1/2;
+#: the randomized quasi-Monte Carlo ground truth may fall a little faster. Outside this band
+#: the ray cast is not converging (b near 0) or shares its samples with the reference.
+SLOPE_BAND = (-0.9, -0.35)
+
+
+@pytest.fixture(scope="module")
+def rows():
+    return X.all_rows(True, seed=SEED)
+
+
+TABLES = {"canopy": X.CANOPY_COLUMNS, "ground": X.GROUND_COLUMNS, "grass": X.GRASS_COLUMNS,
+          "weighting": X.WEIGHTING_COLUMNS, "convergence": X.CONVERGENCE_COLUMNS,
+          "tradeoff": X.TRADEOFF_COLUMNS, "cost": X.COST_COLUMNS}
+
+
+@pytest.mark.parametrize("name", list(TABLES))
+def test_rows_have_the_documented_columns(rows, name):
+    assert rows[name], f"{name}: no rows"
+    for row in rows[name]:
+        assert set(row) == set(TABLES[name]), f"{name}: {sorted(set(row) ^ set(TABLES[name]))}"
+
+
+def test_canopy_rows_cover_every_scene_shell_and_reference(rows):
+    canopy = rows["canopy"]
+    assert {r["scene"] for r in canopy} == set(X.CANOPY_SCENES)
+    assert {r["reference"] for r in canopy} == set(X.REFERENCES)
+    shells = {r["shell"] for r in canopy}
+    assert {"sphere", "ellipsoid"} <= shells and any(s.endswith("spheres") for s in shells)
+    for r in canopy:
+        assert 0.0 <= r["rmse"] <= 1.0 and abs(r["bias"]) <= r["rmse"] + 1e-12
+        assert r["truth_stderr"] > 0 and r["points"] == r["fit_points"]
+
+
+@pytest.mark.parametrize("scene", ["leaf_cloud", "leaf_cloud_dense"])
+@pytest.mark.parametrize("reference", X.REFERENCES)
+def test_fitted_density_beats_no_density_and_ten_times_it(rows, scene, reference):
+    """On a uniform leaf cloud Eq. 6 with the fitted density (fitted on the other half of the
+    points) beats density 0 (V = 1) and ten times the fitted density."""
+    rs = {r["source"]: r for r in rows["canopy"] if r["scene"] == scene and r["model"] == "hegeman"
+          and r["shell"] == "sphere" and r["reference"] == reference}
+    assert rs["fitted"]["rmse"] < rs["none"]["rmse"]
+    assert rs["fitted"]["rmse"] < rs["fitted x10"]["rmse"]
+    assert rs["fitted"]["corr"] > 0.3         # it follows the ground truth, not just its mean
+
+
+def test_equal_error_rays_interpolates_and_extrapolates():
+    rays, rmse = [4, 16, 64], [0.2, 0.1, 0.05]
+    r, extra = X.equal_error_rays(rays, rmse, 0.1)
+    assert not extra and math.isclose(r, 16.0, rel_tol=1e-12)
+    r, extra = X.equal_error_rays(rays, rmse, 0.0707106781)
+    assert not extra and math.isclose(r, 32.0, rel_tol=1e-6)
+    r, extra = X.equal_error_rays(rays, rmse, 0.4)         # slope -1/2 fitted: 1 ray
+    assert extra and math.isclose(r, 1.0, rel_tol=1e-6)
+    with pytest.raises(ValueError, match="increasing"):
+        X.equal_error_rays([16, 4], [0.1, 0.2], 0.1)
+
+
+def test_equal_error_rays_is_monotone_in_the_model_rmse(rows):
+    for key in {(r["scene"], r["points_on"], r["reference"]) for r in rows["convergence"]}:
+        curve = sorted((r for r in rows["convergence"] if (r["scene"], r["points_on"], r["reference"]) == key),
+                       key=lambda r: r["rays"])
+        rays = [r["rays"] for r in curve]
+        rmse = [r["rmse_corrected"] for r in curve]
+        targets = np.geomspace(min(rmse) / 4, max(rmse) * 4, 41)
+        counts = [X.equal_error_rays(rays, rmse, t)[0] for t in targets]
+        assert np.all(np.diff(counts) <= 1e-9 * np.maximum(counts[:-1], 1.0)), key
+    # and on the measured models: a larger RMSE never needs more rays
+    for key in {(r["scene"], r["points_on"], r["reference"]) for r in rows["tradeoff"]}:
+        ms = sorted((r for r in rows["tradeoff"] if (r["scene"], r["points_on"], r["reference"]) == key
+                     and not r["lower_bound"]), key=lambda r: r["model_rmse_corrected"])
+        assert all(a["equal_rays"] >= b["equal_rays"] - 1e-9 for a, b in zip(ms, ms[1:])), key
+
+
+def test_raycast_rmse_matches_its_stderr_and_falls_with_rays():
+    """At each ray count the ray cast's RMSE against the reference (reference noise removed)
+    matches the RMS of the standard error it reports, and falls about as rays^-1/2."""
+    from vobscure.groundtruth import ambient_occlusion
+    from vobscure.scenes import get, leaf_points
+
+    scene = get("leaf_cloud")
+    points, normals = leaf_points(scene, 256, seed=3)
+    ref = ambient_occlusion(scene, points, normals, rays=1024, max_distance=np.inf, seed=99)
+    ref_var = float(np.mean(ref.stderr ** 2))
+    counts = (8, 32, 128)
+    rmse = []
+    for r in counts:
+        e = ambient_occlusion(scene, points, normals, rays=r, max_distance=np.inf, seed=1000 + r)
+        raw = float(np.mean((e.value - ref.value) ** 2))
+        corrected = math.sqrt(max(raw - ref_var, 1e-12))
+        rms_stderr = float(np.sqrt(np.mean(e.stderr ** 2)))
+        ratio = corrected / rms_stderr
+        assert STDERR_RATIO_BAND[0] < ratio < STDERR_RATIO_BAND[1], (r, ratio)
+        rmse.append(corrected)
+    slope = float(np.polyfit(np.log(counts), np.log(rmse), 1)[0])
+    assert SLOPE_BAND[0] < slope < SLOPE_BAND[1], slope
+
+
+def test_tradeoff_rows_are_consistent(rows):
+    for r in rows["tradeoff"]:
+        assert r["equal_rays"] > 0 and r["model_us"] > 0 and r["raycast_us"] > 0
+        assert math.isclose(r["time_ratio"] * r["speedup"], 1.0, rel_tol=1e-9)
+        assert math.isclose(r["time_ratio"], r["model_us"] / r["raycast_us"], rel_tol=1e-9)
+        if r["lower_bound"]:
+            assert r["model_rmse"] ** 2 <= 2 * r["reference_stderr"] ** 2 + 1e-15
+
+
+def test_cost_rows_ratios(rows):
+    cost = {r["shader"]: r for r in rows["cost"]}
+    assert cost["ambient"]["vs_ambient"] == 1.0 and cost["reeves_blau"]["vs_reeves_blau"] == 1.0
+    assert cost["hegeman"]["paper_vs_ambient"] == pytest.approx(5.0)
+    assert cost["hegeman"]["paper_vs_reeves_blau"] == pytest.approx(580 / 460)
+    # writing a constant is cheaper than evaluating either model
+    assert cost["hegeman"]["vs_ambient"] > 1.0 and cost["reeves_blau"]["vs_ambient"] > 1.0
+
+
+def test_weighting_rows_name_the_better_reference(rows):
+    assert rows["weighting"]
+    for r in rows["weighting"]:
+        better = "cosine" if r["rmse_cosine"] < r["rmse_uniform"] else "uniform"
+        assert r["better"] == better
+
+
+def test_ground_rows_over_all_rings_pool_the_rings(rows):
+    ground = rows["ground"]
+    for scene in X.TREE_SCENES:
+        for model in ("hegeman", "exact", "porous"):
+            rs = [r for r in ground if r["scene"] == scene and r["model"] == model and r["reference"] == "cosine"]
+            rings = [r for r in rs if r["distance"] is not None]
+            pooled = next(r for r in rs if r["distance"] is None)
+            assert pooled["points"] == sum(r["points"] for r in rings)
+            mse = sum(r["rmse"] ** 2 * r["points"] for r in rings) / pooled["points"]
+            assert pooled["rmse"] == pytest.approx(math.sqrt(mse), rel=1e-9)
+
+
+def test_grass_rows_heights_and_eq9(rows):
+    d = X.grass_data(True, seed=SEED)
+    assert np.all((d["height"] >= 0) & (d["height"] <= 1))
+    from vobscure.trees import grass_visibility
+
+    h = d["blade_height"]
+    np.testing.assert_allclose(d["model"], grass_visibility(d["height"] * h, h, d["cos"]), rtol=1e-12)
+    overall = [r for r in rows["grass"] if r["height_lo"] == 0.0 and r["height_hi"] == 1.0]
+    assert len(overall) == len(X.REFERENCES) and all(r["points"] == len(h) for r in overall)
+
+
+def test_main_quick_prints_every_table(capsys, tmp_path, rows):
+    assert X.main(["--quick", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for name in TABLES:
+        assert f"## {name}" in out
+        assert (tmp_path / f"trees_{name}.csv").is_file()
+    assert (tmp_path / "trees.json").is_file()
