@@ -50,6 +50,8 @@ def test_canopy_rows_cover_every_scene_shell_and_reference(rows):
     for r in canopy:
         assert 0.0 <= r["rmse"] <= 1.0 and abs(r["bias"]) <= r["rmse"] + 1e-12
         assert r["truth_stderr"] > 0 and r["points"] == r["fit_points"]
+        # the error of bin means never exceeds the error of the points (Cauchy-Schwarz)
+        assert 0.0 <= r["rmse_calibration"] <= r["rmse"] + 1e-12
 
 
 @pytest.mark.parametrize("scene", ["leaf_cloud", "leaf_cloud_dense"])

@@ -96,15 +96,16 @@ SETTINGS = {
     False: {"points": 2048, "truth_rays": 1024, "rays": (4, 8, 16, 32, 64, 128, 256),
             "multi_k": (2, 3, 4, 5), "rings": (0.15, 0.3, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5),
             "ring_points": 64, "grass_points": 2048, "height_bins": 10, "cos_bins": 2,
-            "timing_points": 65536, "repeats": 5},
+            "timing_points": 65536, "raycast_timing_points": 8192, "repeats": 3},
     True: {"points": 96, "truth_rays": 64, "rays": (4, 8, 16),
            "multi_k": (2, 4), "rings": (0.3, 1.0, 2.0), "ring_points": 8, "grass_points": 96,
-           "height_bins": 4, "cos_bins": 2, "timing_points": 4096, "repeats": 1},
+           "height_bins": 4, "cos_bins": 2, "timing_points": 4096, "raycast_timing_points": 96,
+           "repeats": 1},
 }
 
 #: Columns of :func:`canopy_rows` (and :func:`reeves_blau_rows`).
-CANOPY_COLUMNS = ("scene", "kind", "model", "shell", "shells", "source", "parameter", "reference",
-                  "rmse", "bias", "mae", "corr", "model_mean", "truth_mean", "truth_stderr",
+CANOPY_COLUMNS = ("scene", "kind", "model", "shell", "shells", "source", "parameter", "refit", "reference",
+                  "rmse", "bias", "mae", "corr", "rmse_calibration", "model_mean", "truth_mean", "truth_stderr",
                   "points", "fit_points", "truth_rays")
 #: Columns of :func:`ground_rows`.
 GROUND_COLUMNS = ("scene", "model", "reference", "distance", "distance_r", "sphere_radius", "rmse",
@@ -118,7 +119,8 @@ CONVERGENCE_COLUMNS = ("scene", "points_on", "reference", "rays", "rmse", "rmse_
 #: Columns of :func:`tradeoff_rows`.
 TRADEOFF_COLUMNS = ("scene", "points_on", "model", "reference", "model_rmse", "model_rmse_corrected",
                     "equal_rays", "extrapolated", "lower_bound", "model_us", "raycast_us", "time_ratio",
-                    "speedup", "reference_stderr", "points", "timing_points")
+                    "speedup", "speedup_cpu", "reference_stderr", "points", "timing_points",
+                    "raycast_timing_points")
 #: Columns of :func:`cost_rows`.
 COST_COLUMNS = ("scene", "shader", "us_per_point", "vs_ambient", "vs_reeves_blau", "paper_vs_ambient",
                 "paper_vs_reeves_blau", "timing_points", "repeats")
@@ -126,6 +128,10 @@ COST_COLUMNS = ("scene", "shader", "us_per_point", "vs_ambient", "vs_reeves_blau
 WEIGHTING_COLUMNS = ("scene", "what", "model", "rmse_cosine", "rmse_uniform", "better",
                      "stderr_cosine", "stderr_uniform")
 
+#: Equal-count bins of the model's value in ``rmse_calibration`` (:func:`canopy_rows`).
+CALIBRATION_BINS = 10
+#: Bounds of the log-spaced grid that checks :func:`vobscure.trees.fit_density`'s answer.
+LOG_DENSITY_BOUNDS = (math.log(1e-4), math.log(1e5))
 #: Bounds of log(k) in the fit of Reeves-Blau's k (k in 1/length; the scenes are metres-ish).
 LOG_K_BOUNDS = (math.log(1e-4), math.log(1e4))
 
@@ -171,11 +177,57 @@ def _scores(model, truth: "Estimate") -> dict:   # noqa: F821 - Estimate of vobs
             "points": int(len(t))}
 
 
+def _calibration(model, truth_value, bins: int = CALIBRATION_BINS) -> float:
+    """RMSE of the model's bin means against the truth's bin means, the points binned by the
+    model's value (equal counts) and weighted by count: the error of the model as a predictor
+    of the *average* visibility of the points it gives one value (Hegeman's <V>, the ensemble
+    mean of Sec. 3), without the point-to-point scatter no local model can follow."""
+    model = np.asarray(model, dtype=np.float64)
+    t = np.asarray(truth_value, dtype=np.float64)
+    order = np.argsort(model, kind="stable")
+    groups = np.array_split(order, min(bins, len(order)))
+    sq = sum(len(g) * (model[g].mean() - t[g].mean()) ** 2 for g in groups if len(g))
+    return float(np.sqrt(sq / len(model)))
+
+
 def _sub(estimate, index):
     from ..estimate import Estimate
 
     return Estimate(value=np.asarray(estimate.value)[index], stderr=np.asarray(estimate.stderr)[index],
                     samples=estimate.samples)
+
+
+def _grid_then_brent(loss, bounds, points: int = 33) -> tuple[float, float]:
+    """Minimize ``loss(log_x)``: a log-spaced grid over ``bounds``, then a bounded Brent search
+    between the best grid point's neighbours. Returns (log_x, loss)."""
+    from scipy.optimize import minimize_scalar
+
+    grid = np.linspace(*bounds, points)
+    values = [loss(g) for g in grid]
+    best = int(np.argmin(values))
+    lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, len(grid) - 1)]
+    res = minimize_scalar(loss, bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
+    if res.fun <= values[best]:
+        return float(res.x), float(res.fun)
+    return float(grid[best]), float(values[best])
+
+
+def _fit_density_checked(points, normals, shell, reference) -> tuple[float, bool]:
+    """:func:`vobscure.trees.fit_density`, checked against a grid search over
+    :data:`LOG_DENSITY_BOUNDS` (:func:`_grid_then_brent`); the grid's answer replaces it when
+    its squared error is lower by more than 1e-9 relative (``refit`` True)."""
+    from .. import trees as T
+
+    ref = np.asarray(reference, dtype=np.float64)
+
+    def loss_of(density):
+        return float(np.sum((T.canopy_visibility(points, normals, shell, density=density) - ref) ** 2))
+
+    fitted = float(T.fit_density(points, normals, shell, ref))
+    log_x, grid_loss = _grid_then_brent(lambda x: loss_of(math.exp(x)), LOG_DENSITY_BOUNDS)
+    if grid_loss < loss_of(fitted) * (1 - 1e-9):
+        return math.exp(log_x), True
+    return fitted, False
 
 
 def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
@@ -197,8 +249,6 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     float
         k > 0.
     """
-    from scipy.optimize import minimize_scalar
-
     from .. import trees as T
 
     ref = np.asarray(reference, dtype=np.float64)
@@ -208,11 +258,7 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
         return float(np.sum(w * (T.reeves_blau(points, shell, k=math.exp(log_k)) - ref) ** 2))
 
     # a coarse grid first: the loss need not be unimodal in log k over eight decades
-    grid = np.linspace(*LOG_K_BOUNDS, 33)
-    best = int(np.argmin([loss(g) for g in grid]))
-    lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, len(grid) - 1)]
-    res = minimize_scalar(loss, bounds=(lo, hi), method="bounded", options={"xatol": 1e-4})
-    return float(math.exp(res.x))
+    return float(math.exp(_grid_then_brent(loss, LOG_K_BOUNDS)[0]))
 
 
 def equal_error_rays(rays, rmse, target) -> tuple[float, bool]:
@@ -294,19 +340,21 @@ def _canopy(name: str, quick: bool, seed: int) -> dict:
         # predict_density takes one shell (the leaves uniform in it): not a MultiShell
         predicted = None if k > 1 else float(T.predict_density(md["n_leaves"], md["leaf_area"], shell))
         for w in REFERENCES:
-            fitted = float(T.fit_density(points[fit], normals[fit], shell, truth[w].value[fit]))
+            fitted, refit = _fit_density_checked(points[fit], normals[fit], shell, truth[w].value[fit])
             sources = [("fitted", fitted)] + ([("predicted", predicted)] if predicted is not None else [])
             if label == "sphere":
                 sources += [("none", 0.0), ("fitted x10", 10.0 * fitted)]
             for source, density in sources:
                 v = T.canopy_visibility(points[score], normals[score], shell, density=density)
                 configs.append({"model": "hegeman", "shell": label, "shells": k, "source": source,
-                                "parameter": density, "reference": w, "values": v, "shell_obj": shell})
+                                "parameter": density, "reference": w, "values": v, "shell_obj": shell,
+                                "refit": refit and source in ("fitted", "fitted x10")})
             if label in ("sphere", "ellipsoid"):
                 kk = fit_reeves_blau(points[fit], shell, truth[w].value[fit])
                 v = T.reeves_blau(points[score], shell, k=kk)
                 configs.append({"model": "reeves_blau", "shell": label, "shells": k, "source": "fitted",
-                                "parameter": kk, "reference": w, "values": v, "shell_obj": shell})
+                                "parameter": kk, "reference": w, "values": v, "shell_obj": shell,
+                                "refit": False})
     return {"scene": scene, "points": points, "normals": normals, "fit": fit, "score": score,
             "truth": truth, "shells": shells, "configs": configs, "truth_rays": s["truth_rays"]}
 
@@ -318,18 +366,25 @@ def canopy_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES) -> 
     :data:`CANOPY_COLUMNS`. ``parameter`` is the density alpha rho of Eq. 6 (model
     ``"hegeman"``) or Reeves-Blau's k; ``source`` says where it came from (``"fitted"`` to
     this reference on the fit half, ``"predicted"`` from the leaf statistics, ``"none"``: 0,
-    ``"fitted x10"``). Scores are over the other half (``points``).
+    ``"fitted x10"``). Scores are over the other half (``points``). ``refit`` marks a
+    density where :func:`vobscure.trees.fit_density`'s answer had a larger squared error than
+    a grid search's, which replaced it (:func:`_fit_density_checked`). ``rmse_calibration``
+    is the RMSE of the model's bin means against the truth's (:data:`CALIBRATION_BINS` equal-count
+    bins of the model's value): the error in the *average* visibility the model predicts,
+    Hegeman's ensemble mean <V>, without the point-to-point scatter.
     """
     rows = []
     for name in scenes:
         d = _canopy(name, bool(quick), int(seed))
         kind = d["scene"].metadata.get("kind", "")
         for c in d["configs"]:
-            sc = _scores(c["values"], _sub(d["truth"][c["reference"]], d["score"]))
+            truth = _sub(d["truth"][c["reference"]], d["score"])
+            sc = _scores(c["values"], truth)
             rows.append({"scene": name, "kind": kind, "model": c["model"], "shell": c["shell"],
                          "shells": c["shells"], "source": c["source"], "parameter": c["parameter"],
-                         "reference": c["reference"], **sc, "fit_points": int(len(d["fit"])),
-                         "truth_rays": d["truth_rays"]})
+                         "refit": c["refit"], "reference": c["reference"], **sc,
+                         "rmse_calibration": _calibration(c["values"], truth.value),
+                         "fit_points": int(len(d["fit"])), "truth_rays": d["truth_rays"]})
     return rows
 
 
@@ -623,26 +678,39 @@ def _best_multi(d, reference) -> str:
 @lru_cache(maxsize=None)
 def _convergence(quick: bool, seed: int) -> dict:
     """Ray-cast estimates at each ray count of the sweep, per (scene, points_on, reference),
-    and their timings, measured in one run (round-robin with the models' timings)."""
+    and their timings, measured in one run (round-robin with the models' timings).
+
+    The ray casts are timed on the scored points tiled to ``raycast_timing_points`` (each copy
+    its own random directions; the estimates of the first copy give the RMSE), the models on
+    the points tiled to ``timing_points``: enough work per call that the fixed cost of a call
+    does not dominate the time per point."""
+    from ..estimate import Estimate
     from ..groundtruth import ambient_occlusion
     from .common import time_calls
 
     s = setting(quick)
     targets = _targets(quick, seed)
     funcs = {}
-    n_time = s["timing_points"]
+
+    def tiled(a, count):
+        return np.tile(a, (-(-count // len(a)), 1))[:max(count, len(a))]
+
     for ti, t in enumerate(targets):
         P, N = t["points"], t["normals"]
-        reps = -(-n_time // len(P))
-        PT, NT = np.tile(P, (reps, 1))[:n_time], np.tile(N, (reps, 1))[:n_time]
+        PT, NT = tiled(P, s["timing_points"]), tiled(N, s["timing_points"])
+        PR, NR = tiled(P, s["raycast_timing_points"]), tiled(N, s["raycast_timing_points"])
         for w in REFERENCES:
             for r in s["rays"]:
                 funcs[("raycast", ti, w, r)] = (
-                    lambda P=P, N=N, w=w, r=r, sc=t["scene_obj"], sd=seed + 1000 + r:
+                    lambda P=PR, N=NR, w=w, r=r, sc=t["scene_obj"], sd=seed + 1000 + r:
                     ambient_occlusion(sc, P, N, rays=r, weighting=w, max_distance=np.inf, seed=sd))
             for label, m in t["models"].items():
                 funcs[("model", ti, w, label)] = (lambda f=m["fn"][w], PT=PT, NT=NT: f(PT, NT))
     timings, values = time_calls(funcs, repeats=s["repeats"])
+    for key, e in values.items():
+        if key[0] == "raycast":
+            n = len(targets[key[1]]["points"])
+            values[key] = Estimate(value=e.value[:n], stderr=e.stderr[:n], samples=e.samples)
     return {"targets": targets, "timings": timings, "values": values}
 
 
@@ -671,6 +739,16 @@ def convergence_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
     return rows
 
 
+def _time_at(r_eq, rays, times) -> float:
+    """Time per point of a ray cast with ``r_eq`` rays: log-log interpolation of the measured
+    ``times`` at ``rays``; beyond the sweep, proportional to the rays from the nearest end."""
+    if r_eq > rays[-1]:
+        return float(times[-1] * r_eq / rays[-1])
+    if r_eq < rays[0]:
+        return float(times[0] * r_eq / rays[0])
+    return float(np.exp(np.interp(np.log(r_eq), np.log(rays), np.log(times))))
+
+
 def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
     """Speed against accuracy: each model's equal-error ray count and its time relative to that
     ray cast.
@@ -683,7 +761,8 @@ def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
     ``model_us`` is the model's
     time per point (on ``timing_points`` points), ``raycast_us`` the ray cast's per point at
     ``equal_rays`` (log-log interpolation of the measured times), ``time_ratio`` their ratio
-    and ``speedup`` its inverse.
+    and ``speedup`` its inverse (wall time: the ray cast runs on every core, the model on
+    one); ``speedup_cpu`` the same with process CPU time summed over threads.
     """
     s = setting(quick)
     c = _convergence(bool(quick), int(seed))
@@ -697,7 +776,9 @@ def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
             ref_var = float(np.mean(np.asarray(truth.stderr) ** 2))
             curve = [r["rmse_corrected"] for r in conv if r["scene"] == t["scene"]
                      and r["points_on"] == t["points_on"] and r["reference"] == w]
-            t_rc = np.array([c["timings"][("raycast", ti, w, r)].median / n for r in s["rays"]])
+            n_rc = max(s["raycast_timing_points"], n)
+            t_rc = np.array([c["timings"][("raycast", ti, w, r)].median / n_rc for r in s["rays"]])
+            c_rc = np.array([c["timings"][("raycast", ti, w, r)].cpu_median / n_rc for r in s["rays"]])
             for label, m in t["models"].items():
                 v = m["values"][w]
                 rmse = float(np.sqrt(np.mean((v - np.asarray(truth.value)) ** 2)))
@@ -709,18 +790,18 @@ def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
                     r_eq, extra = float(truth.samples), False
                 else:
                     r_eq, extra = equal_error_rays(rays, curve, corrected)
-                rc_s = float(np.exp(np.interp(np.log(r_eq), np.log(rays), np.log(t_rc))))
-                if r_eq > rays[-1]:      # beyond the sweep: time grows linearly with rays
-                    rc_s = float(t_rc[-1] * r_eq / rays[-1])
-                elif r_eq < rays[0]:
-                    rc_s = float(t_rc[0] * r_eq / rays[0])
-                model_s = c["timings"][("model", ti, w, label)].median / s["timing_points"]
+                rc_s = _time_at(r_eq, rays, t_rc)
+                rc_cpu = _time_at(r_eq, rays, c_rc)
+                timing = c["timings"][("model", ti, w, label)]
+                model_s = timing.median / s["timing_points"]
+                model_cpu = timing.cpu_median / s["timing_points"]
                 rows.append({"scene": t["scene"], "points_on": t["points_on"], "model": label, "reference": w,
                              "model_rmse": rmse, "model_rmse_corrected": corrected, "equal_rays": r_eq,
                              "extrapolated": extra, "lower_bound": lower, "model_us": 1e6 * model_s, "raycast_us": 1e6 * rc_s,
                              "time_ratio": model_s / rc_s, "speedup": rc_s / model_s,
+                             "speedup_cpu": rc_cpu / model_cpu if model_cpu > 0 else None,
                              "reference_stderr": math.sqrt(ref_var), "points": n,
-                             "timing_points": s["timing_points"]})
+                             "timing_points": s["timing_points"], "raycast_timing_points": n_rc})
     return rows
 
 
