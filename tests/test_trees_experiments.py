@@ -49,6 +49,7 @@ def test_canopy_rows_cover_every_scene_shell_and_reference(rows):
     assert {"sphere", "ellipsoid"} <= shells and any(s.endswith("spheres") for s in shells)
     for r in canopy:
         assert 0.0 <= r["rmse"] <= 1.0 and abs(r["bias"]) <= r["rmse"] + 1e-12
+        assert r["bias"] == pytest.approx(r["model_mean"] - r["truth_mean"], abs=1e-12)
         assert r["truth_stderr"] > 0 and r["points"] == r["fit_points"]
         # the error of bin means never exceeds the error of the points (Cauchy-Schwarz)
         assert 0.0 <= r["rmse_calibration"] <= r["rmse"] + 1e-12
@@ -79,6 +80,10 @@ def test_equal_error_rays_interpolates_and_extrapolates():
 
 
 def test_equal_error_rays_is_monotone_in_the_model_rmse(rows):
+    # a noisy curve that rises once (as a measured one can): still one answer per target
+    rays, rmse = [4, 8, 16, 32, 64], [0.2, 0.1, 0.12, 0.06, 0.03]
+    counts = [X.equal_error_rays(rays, rmse, t)[0] for t in np.geomspace(0.02, 0.3, 60)]
+    assert np.all(np.diff(counts) <= 1e-9 * np.maximum(counts[:-1], 1.0))
     for key in {(r["scene"], r["points_on"], r["reference"]) for r in rows["convergence"]}:
         curve = sorted((r for r in rows["convergence"] if (r["scene"], r["points_on"], r["reference"]) == key),
                        key=lambda r: r["rays"])
