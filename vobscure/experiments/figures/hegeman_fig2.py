@@ -8,7 +8,9 @@ bounding sphere and ellipsoid).
     leaves, Eq. 6 on the bounding sphere with the density fitted at points, and their signed
     difference, for the sparse (``leaf_cloud``) and the dense (``leaf_cloud_dense``) cloud.
 (b) At points sampled on the leaves (the side facing out of the cloud), scored on the half
-    not used for the fit: Eq. 6 against the ground truth, fitted and predicted density.
+    not used for the fit: Eq. 6 against the ground truth, fitted and predicted density; the
+    lines join the means of ten equal-count bins of the model's value (the average visibility
+    the model predicts, whose error is ``rmse_calibration``).
 (c) RMSE of Eq. 6 per density source (fitted, predicted, none, 10 x fitted) against the
     cosine-weighted and the uniform sky visibility; the ticks mark the ground truth's own
     standard error (the noise floor).
@@ -85,8 +87,8 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path
     rows = [r for r in rows if r["scene"] in names and r["model"] == "hegeman"
             and r["shell"] in ("sphere", "ellipsoid")]
 
-    fig = new_figure(16.0, 13.0)
-    top, middle, bottom = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 0.95], hspace=0.03)
+    fig = new_figure(16.0, 12.5)
+    top, middle, bottom = fig.subfigures(3, 1, height_ratios=[0.72, 1.0, 0.85], hspace=0.03)
     _images(top, quick, seed)
     _scatter(middle, quick, seed)
     _bars(bottom, rows)
@@ -129,8 +131,13 @@ def _scatter(subfig, quick, seed):
                 c = next(c for c in d["configs"] if c["model"] == "hegeman" and c["shell"] == "sphere"
                          and c["source"] == source and c["reference"] == w)
                 e = float(np.sqrt(np.mean((c["values"] - truth) ** 2)))
-                ax.scatter(truth, c["values"], s=5, alpha=0.5, color=color,
+                ax.scatter(truth, c["values"], s=5, alpha=0.35, color=color,
                            label=f"{source} ({c['parameter']:.3g}): RMSE {e:.3f}")
+                # bin means (equal counts by the model's value): the average the model predicts
+                order = np.argsort(c["values"], kind="stable")
+                groups = [g for g in np.array_split(order, 10) if len(g)]
+                ax.plot([truth[g].mean() for g in groups], [c["values"][g].mean() for g in groups], "-o",
+                        color=color, mec="k", mew=0.6, ms=5, lw=1.8)
             ax.plot([0, 1], [0, 1], color="k", lw=0.8)
             ax.set_xlim(0, 1)
             ax.set_ylim(0, 1)
@@ -140,7 +147,8 @@ def _scatter(subfig, quick, seed):
             ax.set_title(f"{label}\nagainst the {w} reference", fontsize=9.5)
             ax.legend(fontsize=7.5, loc="upper left", title="density", title_fontsize=7.5)
     subfig.suptitle("(b) at points on the leaves (scored half): Eq. 6 with the fitted and the "
-                    "predicted density against the ground truth", fontsize=11)
+                    "predicted density against the ground truth; lines: means of ten equal-count bins "
+                    "of the model's value", fontsize=11)
 
 
 def _bars(subfig, rows):

@@ -42,7 +42,7 @@ CSV_RANGES = {"shells": (1, 8), "parameter": (0.0, 1e4), "rmse": (0.0, 1.0), "bi
               "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6), "fit_points": (1, 10 ** 6),
               "truth_rays": (2, 10 ** 5)}
 #: Image size (full, quick) and rays per pixel of panel (a).
-IMAGE_SIZE = {False: (96, 128), True: (36, 48)}
+IMAGE_SIZE = {False: (72, 128), True: (27, 48)}
 IMAGE_RAYS = {False: 256, True: 32}
 
 _TREES = (("tree", "apple-like tree"), ("tree_poplar", "poplar-like tree"))

@@ -169,6 +169,8 @@ def _bars(ax, trade, key, title, xlabel, labels=True):
     ax.set_yticks(y)
     ax.set_yticklabels([f"{_SCENE_LABELS.get(r['scene'], r['scene'])}: {r['model']}" for r in rs] if labels
                        else [""] * len(rs), fontsize=7.5)
+    if key == "speedup":
+        ax.axvline(1.0, color="k", lw=1)      # left of it the ray cast is the faster
     ax.set_xscale("log")
     lo = min(r[key] for r in rs)
     hi = max(r[key] for r in rs)
