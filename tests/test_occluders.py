@@ -122,6 +122,9 @@ def test_hegeman_near_and_inside_the_sphere():
     V = occluder_visibility(x, n, s)
     assert np.all(np.isfinite(V))
     np.testing.assert_allclose(V, 0.5, atol=1e-8)       # A_SA -> pi, V -> 1/2, kept inside
+    # inside, whatever the normal (no horizon rule there); a normal facing away outside: 1
+    V_away = occluder_visibility(x, -n, s)
+    np.testing.assert_allclose(V_away, [1.0, 1.0, 0.5, 0.5, 0.5], atol=1e-8)
 
 
 # ----------------------------------------------------------------------------- exact sphere
