@@ -39,6 +39,8 @@ FIT_TAU_MAX = 50.0
 #: Gauss-Newton polish of the fitted density: stop once a step is this small relative.
 FIT_RTOL = 1e-14
 FIT_MAX_STEPS = 50
+#: Normals shorter than this are rejected (they have no direction).
+ZERO_NORMAL = 1e-12
 
 
 # ----------------------------------------------------------------------------- validation
@@ -71,24 +73,54 @@ def _out_dtype(*arrays) -> type:
 
 
 # ----------------------------------------------------------------------------- the model
-def _cap_optical_depth(x: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """f * V_cap in the unit frame (R = 1, c = 0): (m,) float64 in [0, 4 pi / 3]."""
-    n_dot_x = np.einsum("ij,ij->i", n, x)
-    h = np.clip(1.0 - n_dot_x, 0.0, 2.0)                         # h = R - n.(x - c), clamped to [0, 2R]
-    V_cap = np.pi * h * h * (3.0 - h) / 3.0                       # Hegeman 2006, Eq. 4 (R = 1)
-    x_perp = x - n_dot_x[:, None] * n                             # from the disk's centre to x, in the plane
-    d2 = np.einsum("ij,ij->i", x_perp, x_perp)                    # d^2
+def _cap_optical_depth(x: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """f * V_cap in the unit frame (R = 1, c = 0): (k,) float64 in [0, 4 pi / 3].
+
+    ``m`` are the normals in the unit frame, of any non-zero length: with n = m / |m|,
+    n.x = (m.x) / |m| and the in-plane distance d^2 = |x|^2 - (n.x)^2, so no unit normals
+    are formed (one pass fewer over three components)."""
+    mm = np.einsum("ij,ij->i", m, m)
+    if not np.all(np.isfinite(mm)):
+        raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(mm)))} "
+                         f"NaN or inf row(s)")
+    if np.any(mm < ZERO_NORMAL ** 2):
+        raise ValueError(f"normals hold {int(np.count_nonzero(mm < ZERO_NORMAL ** 2))} zero-length vector(s); "
+                         f"every normal needs a length")
+    n_dot_x = np.einsum("ij,ij->i", m, x)
+    n_dot_x /= np.sqrt(mm)                                        # n.(x - c), R = 1
+    d2 = np.einsum("ij,ij->i", x, x)
+    d2 -= n_dot_x * n_dot_x                                       # d^2, distance to the disk's centre
+    np.maximum(d2, 0.0, out=d2)
+    h = np.subtract(1.0, n_dot_x, out=n_dot_x)
+    np.clip(h, 0.0, 2.0, out=h)                                   # h = R - n.(x - c), clamped to [0, 2R]
     h2 = h * h
-    den = h2 + d2
+    V_cap = np.pi / 3.0 * h2 * (3.0 - h)                          # Hegeman 2006, Eq. 4 (R = 1)
+    den = d2
+    den += h2
     f = np.divide(h2, den, out=np.ones_like(h2), where=den > 0)  # Hegeman 2006, Eq. 5 (f = 1 at h = d = 0)
-    return f * V_cap
+    V_cap *= f
+    return V_cap
 
 
 def _shell_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.ndarray:
     """f * V_cap in world volume (the unit frame's times ``volume_scale``), float64 (m,)."""
-    x = shell.to_unit(points)
-    n = shell.normals_to_unit(normals)
-    return _cap_optical_depth(x, n) * shell.volume_scale
+    if isinstance(shell, Sphere):
+        x = shell.to_unit(points)
+        m = np.asarray(normals, dtype=np.float64)    # a sphere's map keeps directions
+    else:
+        # the ellipsoid's map x -> diag(radii)^-1 Q^T (x - c) and, for normals, its inverse
+        # transpose n -> diag(radii) Q^T n (Sec. 3), each as one (3, 3) product; the normals'
+        # lengths are left to _cap_optical_depth
+        A = shell.rotation / shell.radii
+        x = np.asarray(points, dtype=np.float64) @ A
+        x -= shell.center @ A
+        if not np.all(np.isfinite(x)):
+            raise ValueError(f"points must be finite; they hold {int(np.count_nonzero(~np.isfinite(x)))} NaN "
+                             f"or inf value(s)")
+        m = np.asarray(normals, dtype=np.float64) @ (shell.rotation * shell.radii)
+    tau = _cap_optical_depth(x, m)
+    tau *= shell.volume_scale
+    return tau
 
 
 def _chunk_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.ndarray:
