@@ -28,7 +28,7 @@ Measurements
     predicted from the leaf statistics by :func:`vobscure.trees.predict_density`, and two
     controls: none (V = 1) and ten times the fitted one). Parameters are fitted on one half of
     the points (``fit_points``) and scored on the other (``points``). Reeves-Blau's k is
-    fitted the same way: a 1-D least-squares fit of ``log k`` (bounded Brent search,
+    fitted the same way: a 1-D least-squares fit of ``log k`` (a 33-point grid, then bounded Brent,
     :func:`fit_reeves_blau`), the counterpart of ``fit_density``.
 :func:`ground_rows`
     Fig. 9: ground points on rings around the tree's trunk, at distances from 0.15 to 2.5
@@ -71,7 +71,8 @@ import numpy as np
 __all__ = ["CANOPY_SCENES", "TREE_SCENES", "GRASS_SCENE", "REFERENCES", "PAPER_MPS", "setting",
            "canopy_rows", "reeves_blau_rows", "ground_rows", "grass_rows", "convergence_rows",
            "tradeoff_rows", "cost_rows", "weighting_rows", "equal_error_rays", "fit_reeves_blau",
-           "canopy_images", "canopy_data", "ground_data", "grass_data", "all_rows", "CANOPY_COLUMNS", "GROUND_COLUMNS", "GRASS_COLUMNS",
+           "canopy_images", "canopy_data", "ground_data", "grass_data", "all_rows", "CANOPY_COLUMNS",
+           "GROUND_COLUMNS", "GRASS_COLUMNS",
            "CONVERGENCE_COLUMNS", "TRADEOFF_COLUMNS", "COST_COLUMNS", "WEIGHTING_COLUMNS", "main"]
 
 #: The scenes with a canopy (registered names of :func:`vobscure.scenes.get`): the sparse and
@@ -232,7 +233,7 @@ def _fit_density_checked(points, normals, shell, reference) -> tuple[float, bool
 
 def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     """The k of :func:`vobscure.trees.reeves_blau` that minimizes the (weighted) squared error
-    against ``reference``: a 1-D least-squares fit of ``log k`` by bounded Brent search over
+    against ``reference``: a 1-D least-squares fit of ``log k``, a 33-point grid then bounded Brent over
     :data:`LOG_K_BOUNDS`, the counterpart of :func:`vobscure.trees.fit_density`.
 
     Parameters
@@ -797,7 +798,8 @@ def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
                 model_cpu = timing.cpu_median / s["timing_points"]
                 rows.append({"scene": t["scene"], "points_on": t["points_on"], "model": label, "reference": w,
                              "model_rmse": rmse, "model_rmse_corrected": corrected, "equal_rays": r_eq,
-                             "extrapolated": extra, "lower_bound": lower, "model_us": 1e6 * model_s, "raycast_us": 1e6 * rc_s,
+                             "extrapolated": extra, "lower_bound": lower, "model_us": 1e6 * model_s,
+                             "raycast_us": 1e6 * rc_s,
                              "time_ratio": model_s / rc_s, "speedup": rc_s / model_s,
                              "speedup_cpu": rc_cpu / model_cpu if model_cpu > 0 else None,
                              "reference_stderr": math.sqrt(ref_var), "points": n,

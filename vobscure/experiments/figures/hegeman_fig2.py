@@ -40,7 +40,8 @@ CSV_FILENAME = "hegeman_fig2.csv"
 SCENES = (("leaf_cloud", "sparse cloud (1500 leaves)"), ("leaf_cloud_dense", "dense cloud (6000 leaves)"))
 #: Range of each numeric CSV column (the tests check every row against it).
 CSV_RANGES = {"shells": (1, 1), "parameter": (0.0, 1e4), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0),
-              "mae": (0.0, 1.0), "corr": (-1.0, 1.0), "rmse_calibration": (0.0, 1.0), "refit": (0, 1), "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
+              "mae": (0.0, 1.0), "corr": (-1.0, 1.0), "rmse_calibration": (0.0, 1.0), "refit": (0, 1),
+              "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
               "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6), "fit_points": (1, 10 ** 6),
               "truth_rays": (2, 10 ** 5)}
 #: Image size (full, quick) and rays per pixel of panel (a).

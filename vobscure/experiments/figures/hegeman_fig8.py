@@ -38,7 +38,8 @@ FILENAME = "hegeman_fig8.png"
 CSV_FILENAME = "hegeman_fig8.csv"
 #: Range of each numeric CSV column (the tests check every row against it).
 CSV_RANGES = {"shells": (1, 8), "parameter": (0.0, 1e4), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0),
-              "mae": (0.0, 1.0), "corr": (-1.0, 1.0), "rmse_calibration": (0.0, 1.0), "refit": (0, 1), "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
+              "mae": (0.0, 1.0), "corr": (-1.0, 1.0), "rmse_calibration": (0.0, 1.0), "refit": (0, 1),
+              "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
               "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6), "fit_points": (1, 10 ** 6),
               "truth_rays": (2, 10 ** 5)}
 #: Image size (full, quick) and rays per pixel of panel (a).

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "COLUMNS"]
+__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES"]
 
 #: Name of the PNG :func:`make` writes.
 FILENAME = "hegeman_tradeoff.png"
@@ -45,7 +45,8 @@ CSV_RANGES = {"rays": (1, 10 ** 5), "rmse": (0.0, 1.0), "rmse_corrected": (0.0, 
               "reference_stderr": (0.0, 0.5), "rmse_sqrt_rays": (0.0, 100.0), "points": (1, 10 ** 7),
               "reference_rays": (2, 10 ** 5), "model_rmse": (0.0, 1.0), "model_rmse_corrected": (0.0, 1.0),
               "equal_rays": (0.0, 10 ** 8), "extrapolated": (0, 1), "lower_bound": (0, 1), "model_us": (0.0, 10 ** 5),
-              "raycast_us": (0.0, 10 ** 7), "time_ratio": (0.0, 10 ** 4), "speedup": (0.0, 10 ** 8), "speedup_cpu": (0.0, 10 ** 8),
+              "raycast_us": (0.0, 10 ** 7), "time_ratio": (0.0, 10 ** 4), "speedup": (0.0, 10 ** 8),
+              "speedup_cpu": (0.0, 10 ** 8),
               "raycast_timing_points": (1, 10 ** 8),
               "timing_points": (1, 10 ** 8), "us_per_point": (0.0, 10 ** 5), "vs_ambient": (0.0, 10 ** 6),
               "vs_reeves_blau": (0.0, 10 ** 4), "paper_vs_ambient": (5.0, 5.0),
@@ -53,6 +54,7 @@ CSV_RANGES = {"rays": (1, 10 ** 5), "rmse": (0.0, 1.0), "rmse_corrected": (0.0, 
 
 
 def _columns():
+    """The CSV's columns: ``table``, then the union of the three tables' columns."""
     from .. import trees as X
 
     cols = ["table"]
@@ -60,9 +62,6 @@ def _columns():
         cols.extend(c for c in group if c not in cols)
     return tuple(cols)
 
-
-#: Columns of the CSV: ``table`` then the union of the three tables' columns.
-COLUMNS = None   # filled lazily by make (the trees module is imported only then)
 
 _SCENE_LABELS = {"leaf_cloud": "sparse cloud", "leaf_cloud_dense": "dense cloud", "tree": "apple tree",
                  "tree_poplar": "poplar tree", "grass": "grass"}
