@@ -560,3 +560,29 @@ def test_predict_density_matches_a_poisson_leaf_cloud_at_the_centre():
     limit = t_threshold(groups - 1)
     # the finite leaf size changes the exact value by O(leaf_r / R) at the boundary only
     assert abs(value - exact) < limit * stderr, (value, exact, stderr)
+
+
+@pytest.mark.parametrize("density", [2.0, 8.0])
+def test_fit_density_is_no_worse_than_a_grid_search_when_depths_span_decades(density):
+    """Points at the shell's rim (normal outward, 1e-5 inside) have optical depths ~3e-10,
+    so the log-density search spans 30 decades, most of it a plateau where every interior
+    point reads 0: the fit must still find the interior minimum (a bounded search over the
+    whole range landed on the plateau, density ~1e8, at these settings). A grid search over
+    the whole range is the independent check."""
+    from vobscure.trees import optical_depth
+
+    rng = np.random.default_rng(1)
+    s = Sphere((0, 0, 0), 1.0)
+    x = np.vstack([rng.uniform(-0.6, 0.6, (100, 3)), np.tile([[0.0, 1 - 1e-5, 0.0]], (20, 1))])
+    n = np.vstack([rng.normal(size=(100, 3)), np.tile([[0.0, 1.0, 0.0]], (20, 1))])
+    tau = optical_depth(x, n, s)
+    assert tau.min() < 1e-9 < 0.1 < tau.max()
+    v = np.clip(np.exp(-density * tau) + rng.normal(0, 0.05, tau.shape), 0, 1)
+    a = fit_density(x, n, s, v)
+
+    def loss(d):
+        return float(np.sum((np.exp(-d * tau) - v) ** 2))
+
+    grid = np.exp(np.linspace(np.log(1e-3), np.log(1e12), 4001))
+    assert loss(a) <= min(loss(d) for d in grid) * (1 + 1e-9)
+    assert a == pytest.approx(density, rel=0.1)

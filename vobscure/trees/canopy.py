@@ -39,6 +39,8 @@ FIT_TAU_MAX = 50.0
 #: Gauss-Newton polish of the fitted density: stop once a step is this small relative.
 FIT_RTOL = 1e-14
 FIT_MAX_STEPS = 50
+#: Points of the coarse log-density grid that brackets the fit's search.
+FIT_GRID = 241
 #: Normals shorter than this are rejected (they have no direction).
 ZERO_NORMAL = 1e-12
 
@@ -377,9 +379,16 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
 
     lo = math.log(FIT_TAU_MIN / tau.max())
     hi = math.log(FIT_TAU_MAX / tau.min())
-    res = minimize_scalar(lambda s: loss(math.exp(s)), bounds=(lo, hi), method="bounded",
+    # the loss has plateaus (all open, all closed) and, with optical depths spread over many
+    # decades, need not be unimodal in log(density): a coarse grid first, then a bounded
+    # search in the bracket around the grid's best point
+    grid = np.linspace(lo, hi, FIT_GRID)
+    losses = [loss(math.exp(g)) for g in grid]
+    k = int(np.argmin(losses))
+    bracket = (grid[max(k - 1, 0)], grid[min(k + 1, FIT_GRID - 1)])
+    res = minimize_scalar(lambda s: loss(math.exp(s)), bounds=bracket, method="bounded",
                           options={"xatol": 1e-10})
-    a = math.exp(float(res.x))
+    a = math.exp(float(res.x)) if res.fun <= losses[k] else math.exp(float(grid[k]))
     if loss(0.0) < loss(a):
         a = 0.0
     for _ in range(FIT_MAX_STEPS):                                # Gauss-Newton on r(a) = exp(-a tau) - v
