@@ -22,8 +22,9 @@ def gb():
 
 
 def test_names_and_unknown_name_lists_them():
-    assert methods.names() == ("point", "line", "area", "reference", "hegeman", "hegeman_ellipsoid")
-    assert methods.names(include_references=False) == ("point", "line", "area", "hegeman", "hegeman_ellipsoid")
+    vegetation = ("hegeman", "hegeman_ellipsoid", "hegeman_multishell", "reeves_blau")
+    assert methods.names() == ("point", "line", "area", "reference") + vegetation
+    assert methods.names(include_references=False) == ("point", "line", "area") + vegetation
     with pytest.raises(ValueError, match="unknown method 'gtao'; expected one of point, line, area, reference, hegeman"):
         methods.get("gtao")
 
@@ -144,7 +145,7 @@ def test_a_registered_method_runs_in_compare():
     assert rows["twice:4"]["screen_bias"] - rows["line:5"]["screen_bias"] == pytest.approx(
         float(np.nanmean(twice - line)), abs=1e-12)
     assert np.nanmean(twice - line) > 0.3
-    for name in ("hegeman", "hegeman_ellipsoid"):
+    for name in ("hegeman", "hegeman_ellipsoid", "hegeman_multishell", "reeves_blau"):
         m = methods.get(name)
         assert m.quantity(True) == "sky visibility" and m.reference() == "sky"
         assert m.taps(1) == 0 and m.texels(1) == 0 and m.needs_scene
@@ -198,3 +199,21 @@ def test_compare_on_a_vegetation_scene_runs_the_models_against_the_sky():
     with pytest.raises(ValueError, match="no canopy"):
         vo.experiments.compare.compare("slab", size=(8, 8), methods="hegeman", references=("sky",),
                                        quick=True, cache=False, write=False)
+
+
+def test_reeves_blau_per_pixel_uses_the_leaves_extinction():
+    from vobscure import trees
+    from vobscure.trees.pixels import canopy_shell, scene_extinction
+
+    scene = vo.scenes.get("tree")
+    gb = vo.render_gbuffer(scene, scene.camera((24, 24)))
+    got = methods.Config("reeves_blau", 1).run(gb, radius=0.1, scene=scene)
+    shell = canopy_shell(scene)
+    sigma = scene_extinction(scene, shell)
+    meta = scene.metadata
+    assert sigma == pytest.approx(meta["n_leaves"] / shell.volume * meta["leaf_area"] / 2, rel=1e-12)
+    want = trees.reeves_blau(gb.world_position[gb.valid], shell, k=sigma)
+    np.testing.assert_array_equal(got[gb.valid], want)
+    outside = ~shell.contains(gb.world_position[gb.valid])
+    assert outside.any() and np.all(got[gb.valid][outside] == 1.0)     # the ground: no interaction
+    assert np.nanmin(got) < 0.9                                        # deep in the crown: attenuated

@@ -67,7 +67,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="one or more ball radii (default 0.1 x the scene extent)")
     c.add_argument("--methods", default=None,
                    help="comma-separated NAME[:SAMPLES[:FETCH]] with NAME one of "
-                        f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1, plus hegeman,hegeman_ellipsoid on a "
+                        f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1, plus the vegetation models on a "
                         "vegetation scene)")
     c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
     c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")

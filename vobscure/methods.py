@@ -19,7 +19,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference', 'hegeman', 'hegeman_ellipsoid')
+('point', 'line', 'area', 'reference', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 from .estimate import DEFAULT_GROUPS
 from .screenspace import point_taps, vo_area, vo_line, vo_point, vo_reference
-from .trees.pixels import hegeman_gbuffer
+from .trees.pixels import hegeman_gbuffer, reeves_blau_gbuffer
 
 __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
            "parse", "unregister"]
@@ -296,7 +296,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, hegeman, hegeman_ellipsoid
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
@@ -357,7 +357,19 @@ register(Method("hegeman", hegeman_gbuffer, default_samples=1, fetch="none", fet
                 taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
                 summary="Hegeman et al. 2006: canopy sphere (Eqs. 4-6) and ground occluder (Eqs. 7-8); "
                         "vegetation scenes only"))
+def _hegeman_multishell(gbuffer, **kwargs):
+    """Hegeman et al. 2006 with three spheres by k-means, each point in the closest (Sec. 5)."""
+    return hegeman_gbuffer(gbuffer, shell="multishell", k=3, **kwargs)
+
+
 register(Method("hegeman_ellipsoid", _hegeman_ellipsoid, default_samples=1, fetch="none", fetch_parameter=None,
                 taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
                 summary="Hegeman et al. 2006 with an ellipsoidal canopy shell (Sec. 3, Fig. 8); vegetation "
                         "scenes only"))
+register(Method("hegeman_multishell", _hegeman_multishell, default_samples=1, fetch="none", fetch_parameter=None,
+                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
+                summary="Hegeman et al. 2006 with three k-means spheres (Sec. 5, Fig. 3); vegetation scenes only"))
+register(Method("reeves_blau", reeves_blau_gbuffer, default_samples=1, fetch="none", fetch_parameter=None,
+                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
+                summary="Reeves & Blau 1985: exp(-k depth in the canopy), k the leaves' extinction; the "
+                        "baseline of Hegeman et al.; vegetation scenes only"))
