@@ -24,9 +24,12 @@ What comes from the library and what is the benchmarks' own
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import platform
 import time
+import tracemalloc
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from vobscure.experiments.common import machine, time_calls
@@ -96,6 +99,19 @@ class Report:
 
 
 # --------------------------------------------------------------------------- machine
+def peak_bytes(fn: Callable) -> int:
+    """Peak traced memory (bytes) of one call of ``fn``, tracing started just before it."""
+    gc.collect()
+    tracemalloc.start()
+    try:
+        result = fn()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    del result
+    return peak
+
+
 def load_average() -> str:
     return ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
 

@@ -84,14 +84,11 @@ The exit code is 0 unless something raises; no timing is asserted.
 from __future__ import annotations
 
 import dataclasses
-import gc
 import os
 import sys
-import tracemalloc
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -100,7 +97,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _benc
 
 import _bench  # noqa: E402
 import vobscure as vo  # noqa: E402
-from _bench import Timing, interleaved  # noqa: E402
+from _bench import Timing, interleaved, peak_bytes  # noqa: E402
 from vobscure.methods import Config  # noqa: E402
 
 FULL_SIZES = (512, 1024)
@@ -309,19 +306,6 @@ def reads_per_pixel(b: Bench, gb, radius: float, pixels: int) -> float | None:
 
 
 # --------------------------------------------------------------------------- memory
-def peak_bytes(fn: Callable) -> int:
-    """Peak traced memory (bytes) of one call of ``fn``, tracing started just before it."""
-    gc.collect()
-    tracemalloc.start()
-    try:
-        result = fn()
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    del result
-    return peak
-
-
 # --------------------------------------------------------------------------- report
 class Report(_bench.Report):
     columns = (f"{'configuration':<22} {'median s':>9} {'cores':>5} {'taps/px':>7} {'texels/px':>9} "

@@ -47,11 +47,8 @@ Run from the repository root::
 
 from __future__ import annotations
 
-import gc
 import sys
-import tracemalloc
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -59,7 +56,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a sourc
 sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _bench module
 
 import _bench  # noqa: E402
-from _bench import Timing, interleaved  # noqa: E402
+from _bench import Timing, interleaved, peak_bytes  # noqa: E402
 from vobscure.trees import (  # noqa: E402
     Ellipsoid,
     Sphere,
@@ -93,19 +90,6 @@ def inputs(n: int, seed: int = 0):
     height = rng.uniform(0.0, BLADE_HEIGHT, n)
     cos_theta = rng.uniform(-1.0, 1.0, n)
     return points, normals, height, cos_theta
-
-
-def peak_bytes(fn: Callable) -> int:
-    """Peak traced memory (bytes) of one call of ``fn``, tracing started just before it."""
-    gc.collect()
-    tracemalloc.start()
-    try:
-        result = fn()
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    del result
-    return peak
 
 
 # --------------------------------------------------------------------------- report

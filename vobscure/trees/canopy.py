@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .._validate import as_array, check_int, check_positive
+from ._arrays import as_raw_points, out_dtype
 from .shells import Ellipsoid, MultiShell, Sphere
 
 __all__ = ["canopy_visibility", "reeves_blau", "fit_density", "predict_density", "optical_depth"]
@@ -52,26 +53,6 @@ def _check_shell(shell, name: str = "shell", *, multi: bool = True):
         want = "a Sphere, an Ellipsoid or a MultiShell" if multi else "a Sphere or an Ellipsoid"
         raise ValueError(f"{name} must be {want}, got {type(shell).__name__}")
     return shell
-
-
-def _as_raw_points(value, name: str) -> np.ndarray:
-    """(n, 3) numeric array without a copy (finiteness is checked per chunk)."""
-    try:
-        arr = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric array: {exc}") from None
-    if arr.dtype.kind not in "fiu":
-        raise ValueError(f"{name} must be a numeric array, got dtype {arr.dtype}")
-    if arr.shape == (3,):
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
-    return arr
-
-
-def _out_dtype(*arrays) -> type:
-    """float32 when every input is float32 (or narrower float), else float64."""
-    return np.float32 if all(a.dtype.kind == "f" and a.dtype.itemsize <= 4 for a in arrays) else np.float64
 
 
 # ----------------------------------------------------------------------------- the model
@@ -140,8 +121,8 @@ def _chunk_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.n
 def _checked_inputs(points, normals, shell, chunk):
     _check_shell(shell)
     chunk = check_int(chunk, "chunk")
-    P = _as_raw_points(points, "points")
-    N = _as_raw_points(normals, "normals")
+    P = as_raw_points(points, "points")
+    N = as_raw_points(normals, "normals")
     if N.shape[0] != P.shape[0]:
         raise ValueError(f"normals must have one row per point ({P.shape[0]}), got {N.shape[0]}")
     return P, N, chunk
@@ -241,7 +222,7 @@ def canopy_visibility(points, normals, shell, *, density: float, chunk: int = DE
     """
     density = check_positive(density, "density", allow_zero=True)
     P, N, chunk = _checked_inputs(points, normals, shell, chunk)
-    out = np.empty(P.shape[0], dtype=_out_dtype(P, N))
+    out = np.empty(P.shape[0], dtype=out_dtype(P, N))
     for sl, tau in _chunked_optical_depth(P, N, shell, chunk):  # tau = f V_cap, world volume
         with np.errstate(over="ignore", under="ignore"):
             out[sl] = np.exp(-density * tau)                     # Hegeman 2006, Eq. 6: V = exp(-alpha rho f V_cap)
@@ -289,7 +270,7 @@ def reeves_blau(points, shell, *, k: float) -> np.ndarray:
     """
     _check_shell(shell)
     k = check_positive(k, "k", allow_zero=True)
-    P_raw = _as_raw_points(points, "points")
+    P_raw = as_raw_points(points, "points")
     P = as_array(P_raw, "points")
     depth = np.zeros(P.shape[0])
     if isinstance(shell, MultiShell):
@@ -301,7 +282,7 @@ def reeves_blau(points, shell, *, k: float) -> np.ndarray:
         if np.any(sel):
             x = s.to_unit(P[sel])
             depth[sel] = s.equivalent_radius * np.maximum(1.0 - np.linalg.norm(x, axis=1), 0.0)
-    out = np.empty(P.shape[0], dtype=_out_dtype(P_raw))
+    out = np.empty(P.shape[0], dtype=out_dtype(P_raw))
     with np.errstate(over="ignore", under="ignore"):
         out[:] = np.exp(-k * depth)                              # Reeves & Blau 1985: exp(-k depth)
     return out

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._validate import as_array, as_points, as_unit_vectors, check_choice, check_int, check_positive
+from ._arrays import as_raw_points, out_dtype
 from .shells import Sphere
 
 __all__ = [
@@ -56,29 +57,6 @@ COS_THETA_SLACK = 1e-6
 
 
 # ----------------------------------------------------------------------------- validation
-def _as_raw_points(value, name: str) -> np.ndarray:
-    """(n, 3) numeric array without a copy (converted and checked for finiteness per chunk)."""
-    try:
-        arr = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric array: {exc}") from None
-    if arr.dtype.kind not in "fiu":
-        raise ValueError(f"{name} must be a numeric array, got dtype {arr.dtype}")
-    if arr.shape == (3,):
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
-    return arr
-
-
-def _out_dtype(*arrays) -> type:
-    """float32 when every array input is float32 (or narrower), else float64."""
-    arrays = [a for a in arrays if isinstance(a, np.ndarray)]
-    if arrays and all(a.dtype.kind == "f" and a.dtype.itemsize <= 4 for a in arrays):
-        return np.float32
-    return np.float64
-
-
 def _as_spheres(spheres) -> tuple[Sphere, ...]:
     if isinstance(spheres, Sphere):
         return (spheres,)
@@ -420,8 +398,8 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     check_choice(model, "model", OCCLUDER_MODELS)
     check_choice(weighting, "weighting", WEIGHTINGS)
     chunk = check_int(chunk, "chunk", minimum=1)
-    raw_points = _as_raw_points(points, "points")
-    raw_normals = _as_raw_points(normals, "normals")
+    raw_points = as_raw_points(points, "points")
+    raw_normals = as_raw_points(normals, "normals")
     if raw_normals.shape[0] != raw_points.shape[0]:
         raise ValueError(f"normals must have one row per point ({raw_points.shape[0]}), "
                          f"got {raw_normals.shape[0]}")
@@ -437,7 +415,7 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     if model == "porous":
         chunk = min(chunk, POROUS_CHUNK)
     n = raw_points.shape[0]
-    out = np.empty(n, dtype=_out_dtype(raw_points, raw_normals))
+    out = np.empty(n, dtype=out_dtype(raw_points, raw_normals))
     for start in range(0, n, chunk):
         s = slice(start, min(start + chunk, n))
         x = as_points(raw_points[s], "points")
@@ -509,7 +487,7 @@ def grass_visibility(height, blade_height, cos_theta) -> np.ndarray:
     except ValueError:
         raise ValueError(f"height {P_z.shape}, blade_height {h.shape} and cos_theta {ct.shape} must "
                          "broadcast to one shape") from None
-    V = np.empty(P_z.shape, dtype=_out_dtype(height, blade_height, cos_theta))
+    V = np.empty(P_z.shape, dtype=out_dtype(height, blade_height, cos_theta))
     if V.ndim == 0:
         V[()] = _grass(P_z, h, ct)
         return V

@@ -78,6 +78,12 @@ def canopy_shell(scene, *, kind: str = "sphere", k: int = 3, seed=0):
     return cached[key]
 
 
+def _one_shell(scene, shell):
+    """``shell``, or for a multishell (whose leaves are not attributed to its shells) the
+    bounding sphere of all the leaves."""
+    return bounding_sphere(_canopy_points(scene)) if isinstance(shell, MultiShell) else shell
+
+
 def scene_density(scene, shell) -> float:
     """alpha*rho of Eq. 6 predicted from the scene's leaf statistics (``n_leaves``,
     ``leaf_area``) by :func:`predict_density` for ``shell``; for a multishell, the density
@@ -92,9 +98,7 @@ def scene_density(scene, shell) -> float:
     True
     """
     meta = scene.metadata
-    if isinstance(shell, MultiShell):
-        shell = bounding_sphere(_canopy_points(scene))
-    return predict_density(meta["n_leaves"], meta["leaf_area"], shell)
+    return predict_density(meta["n_leaves"], meta["leaf_area"], _one_shell(scene, shell))
 
 
 def hegeman_gbuffer(gbuffer, *, scene, shell: str = "sphere", ground: str = "hegeman", density=None,
@@ -169,9 +173,7 @@ def scene_extinction(scene, shell) -> float:
     True
     """
     meta = scene.metadata
-    if isinstance(shell, MultiShell):
-        shell = bounding_sphere(_canopy_points(scene))
-    return meta["n_leaves"] / shell.volume * meta["leaf_area"] / 2.0
+    return meta["n_leaves"] / _one_shell(scene, shell).volume * meta["leaf_area"] / 2.0
 
 
 def reeves_blau_gbuffer(gbuffer, *, scene, k=None, radius=None, normal_clamp: bool = False, thickness=None,
