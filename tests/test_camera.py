@@ -403,3 +403,224 @@ def test_scaled(projection):
     back = big.scaled(1 / k)
     np.testing.assert_allclose(back.eye, cam.eye, rtol=RTOL)
     assert cam.with_size((4, 3)).size == (4, 3)
+
+
+# ---------------------------------------------------------------------------- intrinsics (issue 12)
+def _gl_matrix(fx, fy, cx, cy, W, H, n, f):
+    """glFrustum(l, r, b, t, n, f) for the frustum whose window is the image (column vectors)."""
+    # pixel x = cx + fx X/Z reaches the image edges 0 and W at X/Z = -cx/fx, (W - cx)/fx
+    l, r = -cx / fx * n, (W - cx) / fx * n
+    b, t = -(H - cy) / fy * n, cy / fy * n        # rows down: y = H is the bottom
+    return np.array([[2 * n / (r - l), 0, (r + l) / (r - l), 0],
+                     [0, 2 * n / (t - b), (t + b) / (t - b), 0],
+                     [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)],
+                     [0, 0, -1, 0]])
+
+
+def _dx_matrix(fx, fy, cx, cy, W, H, n, f):
+    """D3DXMatrixPerspectiveOffCenterLH(l, r, b, t, n, f) (row vectors)."""
+    l, r = -cx / fx * n, (W - cx) / fx * n
+    b, t = -(H - cy) / fy * n, cy / fy * n
+    return np.array([[2 * n / (r - l), 0, 0, 0],
+                     [0, 2 * n / (t - b), 0, 0],
+                     [(l + r) / (l - r), (t + b) / (b - t), f / (f - n), 1],
+                     [0, 0, n * f / (n - f), 0]])
+
+
+INTRINSICS = dict(fx=70.0, fy=35.0, cx=12.25, cy=40.5)
+
+
+def _pose(cam):
+    return cam.pose.copy()
+
+
+def test_look_at_intrinsics_attributes():
+    cam = Camera.look_at((1, 2, 3), (0, 0, 0), size=(64, 48), fov_y=50.0)
+    f = 24 / math.tan(math.radians(25))
+    assert cam.fx == cam.fy == pytest.approx(f, rel=RTOL) and (cam.cx, cam.cy) == (32.0, 24.0)
+    assert cam.has_pose and cam.near is None and cam.far is None and cam.is_centered_square
+    ortho = Camera.look_at((1, 2, 3), (0, 0, 0), size=(64, 48), ortho_height=4.0)
+    assert ortho.fx == ortho.fy == 12.0 and (ortho.cx, ortho.cy) == (32.0, 24.0)
+    # the pose is the view -> world matrix: columns right, up, forward, eye
+    np.testing.assert_array_equal(cam.pose[:3, :3], cam.rotation.T)
+    np.testing.assert_array_equal(cam.pose[:3, 3], cam.eye)
+    np.testing.assert_array_equal(cam.pose[3], [0, 0, 0, 1])
+
+
+@pytest.mark.parametrize("size", [(64, 48), (1, 1), (7, 300)])
+def test_from_intrinsics_equals_look_at_bit_for_bit(size):
+    """fx = fy = focal, (cx, cy) = (W/2, H/2) and the look_at pose: the same numbers exactly."""
+    a = Camera.look_at((1.0, 2.0, 3.0), (-0.5, 0.2, 0.1), up=(0.1, 1.0, 0.3), size=size, fov_y=55.0)
+    b = Camera.from_intrinsics(a.fx, a.fy, a.cx, a.cy, size, pose=a.pose)
+    assert b != a and b.is_centered_square   # different records, the same projection
+    pts = np.random.default_rng(0).normal(size=(40, 3)) * 3
+    np.testing.assert_array_equal(a.world_to_view(pts), b.world_to_view(pts))
+    for x, y in zip(a.project(pts), b.project(pts)):
+        np.testing.assert_array_equal(x, y)
+    px = np.random.default_rng(1).uniform(0, 64, size=(40, 2))
+    np.testing.assert_array_equal(a.unproject(px, 2.5), b.unproject(px, 2.5))
+    for dtype in (np.float32, np.float64):
+        for x, y in zip(a.primary_rays(dtype=dtype), b.primary_rays(dtype=dtype)):
+            np.testing.assert_array_equal(x, y)
+
+
+def test_intrinsics_projection_formula():
+    cam = Camera.from_intrinsics(size=(64, 48), **INTRINSICS)
+    (x, y), z = cam.project([0.3, -0.2, 2.0])
+    assert (x, y, z) == pytest.approx((12.25 + 70 * 0.15, 40.5 + 35 * 0.1, 2.0), rel=RTOL)
+    np.testing.assert_allclose(cam.unproject([x, y], z), [0.3, -0.2, 2.0], rtol=RTOL)
+    assert cam.pixels_per_unit(2.0) == pytest.approx(17.5, rel=RTOL)
+    np.testing.assert_allclose(cam.pixels_per_unit_xy([2.0, 4.0]), [[35.0, 17.5], [17.5, 8.75]], rtol=RTOL)
+    assert cam.pixels_per_unit_xy(2.0).shape == (2,)
+    assert not cam.is_centered_square and cam.focal_length_px == 35.0 and cam.fov_y is None
+
+
+@given(st.floats(1.0, 1e4), st.floats(1.0, 1e4), st.floats(-1e3, 1e3), st.floats(-1e3, 1e3),
+       view_points_in_front)
+@SETTINGS
+def test_intrinsics_roundtrip(fx, fy, cx, cy, p):
+    cam = Camera.from_intrinsics(fx, fy, cx, cy, (100, 80))
+    pixels, depth = cam.project(p)
+    np.testing.assert_allclose(cam.unproject(pixels, depth), p, rtol=RTOL_ROUNDTRIP, atol=1e-9 * max(1, abs(p[2])))
+
+
+def test_intrinsics_primary_rays_pass_through_their_pixels():
+    look = Camera.look_at((1.0, 2.0, 3.0), (-0.5, 0.2, 0.1), size=(9, 5), fov_y=70.0)
+    cam = Camera.from_intrinsics(size=(9, 5), pose=look.pose, **INTRINSICS)
+    origins, directions = cam.primary_rays()
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=-1), 1.0, atol=ATOL)
+    for t in (0.3, 1.0, 10.0):
+        pixels, depth = cam.project(cam.world_to_view(origins + t * directions))
+        np.testing.assert_allclose(pixels, cam.pixel_centers(), rtol=0, atol=1e-7)
+        assert np.all(depth > 0)
+
+
+def test_no_pose_world_queries_raise_naming_the_pose():
+    cam = Camera.from_intrinsics(size=(64, 48), **INTRINSICS)
+    assert not cam.has_pose
+    cam.project([0, 0, 1.0])
+    cam.unproject([1.0, 2.0], 3.0)
+    cam.pixels_per_unit(1.0)
+    for call in (lambda: cam.eye, lambda: cam.target, lambda: cam.rotation, lambda: cam.forward,
+                 lambda: cam.right, lambda: cam.up, lambda: cam.up_hint, lambda: cam.pose,
+                 lambda: cam.world_to_view([0, 0, 0]), lambda: cam.view_to_world([0, 0, 1]),
+                 lambda: cam.world_to_view_dir([0, 0, 1]), lambda: cam.view_to_world_dir([0, 0, 1]),
+                 lambda: cam.primary_rays(), lambda: cam.pixel_rays([1.0, 1.0])):
+        with pytest.raises(ValueError, match="pose"):
+            call()
+
+
+def test_bad_intrinsics():
+    good = dict(size=(8, 6), **INTRINSICS)
+    for key, value in (("fx", 0.0), ("fy", -1.0), ("fx", np.nan), ("cx", np.inf), ("cy", "a"),
+                       ("size", (8, 0))):
+        with pytest.raises(ValueError, match=key):
+            Camera.from_intrinsics(**{**good, key: value})
+    pose = np.diag([1.0, 1.0, -1.0, 1.0])
+    Camera.from_intrinsics(**good, pose=pose)
+    with pytest.raises(ValueError, match="determinant"):
+        Camera.from_intrinsics(**good, pose=np.eye(4))     # right-handed: an OpenGL camera's
+    with pytest.raises(ValueError, match="rotation"):
+        Camera.from_intrinsics(**good, pose=np.diag([2.0, 1.0, -1.0, 1.0]))
+    with pytest.raises(ValueError, match="last row"):
+        Camera.from_intrinsics(**good, pose=pose + np.array([[0, 0, 0, 0]] * 3 + [[0, 0, 1, 0]]))
+    with pytest.raises(ValueError, match="pose"):
+        Camera.from_intrinsics(**good, pose=np.eye(3))
+
+
+@pytest.mark.parametrize("far", [9.0, math.inf])
+@pytest.mark.parametrize("convention", ["opengl", "directx"])
+def test_from_projection_reads_known_intrinsics(convention, far):
+    W, H, n = 64, 48, 0.25
+    make = _gl_matrix if convention == "opengl" else _dx_matrix
+    if math.isinf(far):
+        P = make(W=W, H=H, n=n, f=1e300, **INTRINSICS)
+        P[2, 2] = -1.0 if convention == "opengl" else 1.0      # the limit f -> inf
+        P[(2, 3) if convention == "opengl" else (3, 2)] = -2 * n if convention == "opengl" else -n
+    else:
+        P = make(W=W, H=H, n=n, f=far, **INTRINSICS)
+    cam = Camera.from_projection(P, (W, H), convention=convention)
+    assert (cam.fx, cam.fy, cam.cx, cam.cy) == pytest.approx(tuple(INTRINSICS.values()), rel=RTOL)
+    assert cam.near == pytest.approx(n, rel=RTOL) and cam.far == pytest.approx(far, rel=RTOL)
+    # independently: clip coordinates -> NDC -> viewport (y up in NDC, rows down)
+    p = np.array([0.3, -0.2, 2.0])
+    if convention == "opengl":
+        clip = P @ np.array([p[0], p[1], -p[2], 1.0])           # eye space looks down -z
+        ndc_z_range = (-1, 1)
+    else:
+        clip = np.array([*p, 1.0]) @ P
+        ndc_z_range = (0, 1)
+    ndc = clip[:3] / clip[3]
+    expected = ((ndc[0] + 1) * W / 2, (1 - ndc[1]) * H / 2)
+    np.testing.assert_allclose(cam.project(p)[0], expected, rtol=RTOL)
+    # depth at the near plane maps to the near end of NDC z
+    if not math.isinf(far):
+        for depth, nz in ((n, ndc_z_range[0]), (far, ndc_z_range[1])):
+            q = np.array([0.0, 0.0, depth])
+            c = P @ [0, 0, -depth, 1.0] if convention == "opengl" else np.array([*q, 1.0]) @ P
+            assert c[2] / c[3] == pytest.approx(nz, abs=1e-9)
+
+
+def test_from_projection_rejects_other_layouts():
+    P = _gl_matrix(W=64, H=48, n=0.25, f=9.0, **INTRINSICS)
+    with pytest.raises(ValueError, match="opengl"):
+        Camera.from_projection(P.T, (64, 48))                     # column-major memory read as rows
+    with pytest.raises(ValueError, match="directx"):
+        Camera.from_projection(P, (64, 48), convention="directx")
+    skew = P.copy()
+    skew[0, 1] = 0.3
+    with pytest.raises(ValueError, match="skew"):
+        Camera.from_projection(skew, (64, 48))
+    ortho = np.diag([1.0, 1.0, -0.2, 1.0])
+    with pytest.raises(ValueError, match="orthographic"):
+        Camera.from_projection(ortho, (64, 48))
+    with pytest.raises(ValueError, match="convention"):
+        Camera.from_projection(P, (64, 48), convention="vulkan")
+    flipped = P.copy()
+    flipped[1, 1] *= -1
+    with pytest.raises(ValueError, match=r"P\[1, 1\]"):
+        Camera.from_projection(flipped, (64, 48))
+
+
+@pytest.mark.parametrize("with_pose", [False, True])
+def test_intrinsics_records_roundtrip(with_pose):
+    look = Camera.look_at((1.0, 2.0, 3.0), (-0.5, 0.2, 0.1), size=(9, 5), fov_y=70.0)
+    cam = Camera.from_intrinsics(size=(9, 5), pose=look.pose if with_pose else None, near=0.1, far=math.inf,
+                                 **INTRINSICS)
+    d = json.loads(json.dumps(cam.to_dict()))
+    back = Camera.from_dict(d)
+    assert back == cam and hash(back) == hash(cam) and back.to_dict() == cam.to_dict()
+    assert pickle.loads(pickle.dumps(cam)) == cam
+    assert eval(repr(cam), {"Camera": Camera}) == cam
+    assert cam != Camera.from_intrinsics(size=(9, 5), **{**INTRINSICS, "cx": 12.0})
+    assert len({cam, back, look}) == 2
+    with pytest.raises(ValueError, match="unknown"):
+        Camera.from_dict({**d, "fov_y": 40.0})
+    with pytest.raises(ValueError, match="projection"):
+        Camera.from_dict({**d, "projection": "orthographic"})
+    with pytest.raises(ValueError, match="'cy'"):
+        Camera.from_dict({k: v for k, v in d.items() if k != "cy"})
+
+
+def test_look_at_record_unchanged():
+    """The cache keys cameras by to_dict(): a look_at record keeps exactly its old keys."""
+    cam = Camera.look_at((0, 0, 5), (0, 0, 0), size=(4, 3))
+    assert list(cam.to_dict()) == ["eye", "target", "up", "size", "fov_y", "ortho_height", "projection"]
+
+
+def test_cropped_and_derived_cameras():
+    look = Camera.look_at((1.0, 2.0, 3.0), (-0.5, 0.2, 0.1), size=(40, 30), fov_y=60.0)
+    crop = look.cropped(7, 3, (11, 13))
+    o1, d1 = look.primary_rays()
+    o2, d2 = crop.primary_rays()
+    np.testing.assert_allclose(d2, d1[3:16, 7:18], atol=1e-12)
+    with pytest.raises(ValueError, match="perspective"):
+        Camera.look_at((0, 0, 5), (0, 0, 0), size=(4, 3), ortho_height=1.0).cropped(0, 0, (2, 2))
+    with pytest.raises(ValueError, match="left"):
+        look.cropped(1.5, 0, (2, 2))
+    cam = Camera.from_intrinsics(size=(64, 48), pose=look.pose, near=0.5, **INTRINSICS)
+    big = cam.with_size((128, 24))
+    assert (big.fx, big.fy, big.cx, big.cy) == (140.0, 17.5, 24.5, 20.25)
+    s = cam.scaled(2.0)
+    np.testing.assert_array_equal(s.eye, 2 * cam.eye)
+    assert s.near == 1.0 and s.fx == cam.fx
