@@ -7,11 +7,14 @@ optionally temporal flicker over a camera orbit (:mod:`vobscure.experiments.comp
 ``vobscure render`` renders a G-buffer of a scene and its ray-cast reference (AO,
 obscurance or world-space VO) and writes depth, normal and visibility PNGs plus an ``.npz``
 with every array and a provenance record. ``vobscure scenes`` lists the built-in scenes.
+``vobscure estimate`` runs one estimator on your own frame(s), read from EXR, NPY/NPZ, PFM or
+PNG files (:mod:`vobscure.io`), and writes the visibility.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -98,6 +101,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--no-cache", action="store_true", help="recompute every reference, write no cache")
     c.add_argument("--quiet", action="store_true", help="no progress bars or summary")
 
+    _estimate_parser(sub)
+
     f = sub.add_parser("figures", help="regenerate the paper figures",
                        description="Regenerate figures (one module each in vobscure.experiments.figures).")
     f.add_argument("names", nargs="*", default=["all"], metavar="NAME", help="figure names or 'all' (default)")
@@ -155,6 +160,235 @@ def _figures_main(args) -> int:
     for path in paths:
         print(f"wrote {path}")
     return 0
+
+
+# --------------------------------------------------------------------------- vobscure estimate
+#: Frames of at least this many pixels get a progress bar over the stages of their estimate.
+ESTIMATE_PROGRESS_PIXELS = 1 << 20
+
+
+def _estimate_parser(sub) -> None:
+    e = sub.add_parser("estimate", help="estimate the VO of your own frame(s) from depth (and normal) files",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Estimate screen-space Volumetric Obscurance of a renderer's frame: read "
+                                   "its depth (and normals) from EXR, NPY/NPZ, PFM or 16-bit PNG files "
+                                   "(vobscure.io.read_gbuffer), run one estimator and write the visibility "
+                                   "(EXR, PNG, NPY or PFM). A directory or glob of frames runs frame by frame "
+                                   "with the same seed and reports the temporal flicker.",
+                       epilog="example:\n  vobscure estimate --depth frame.exr --fov 39.6 --radius 0.5 "
+                              "--out vo.exr\n  vobscure estimate --depth 'frames/*.exr' --fov 39.6 --radius 0.5 "
+                              "--out vo/")
+    e.add_argument("--depth", required=True, metavar="PATH",
+                   help="depth file (.exr .npy .npz .pfm .png), a directory of them or a glob in quotes")
+    e.add_argument("--normal", default=None, metavar="PATH",
+                   help="normal file(s) when the normals are not in the depth file (same count as --depth)")
+    lens = e.add_mutually_exclusive_group(required=True)
+    lens.add_argument("--fov", type=float, metavar="DEG", help="vertical field of view in degrees")
+    lens.add_argument("--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"),
+                      help="pinhole intrinsics in pixels (principal point from the top-left corner)")
+    lens.add_argument("--projection", type=Path, metavar="FILE",
+                      help="a 4x4 projection matrix as text (numpy.loadtxt)")
+    e.add_argument("--projection-convention", choices=("opengl", "directx"), default="opengl",
+                   help="how --projection is written (default opengl: column vectors, looking down -z)")
+    e.add_argument("--pose", type=Path, default=None, metavar="FILE",
+                   help="4x4 camera-to-world matrix as text, OpenGL style (the camera looks down its -z, y up; "
+                        "Blender's camera matrix_world); needed for world-space normals")
+    e.add_argument("--depth-kind", default="linear",
+                   help="what the depth values are (default linear view depth; see GBuffer.from_arrays)")
+    e.add_argument("--near", type=float, default=None, help="near plane, for non-linear depth kinds")
+    e.add_argument("--far", type=float, default=None, help="far plane, for non-linear depth kinds")
+    e.add_argument("--normal-space", choices=("view", "world"), default=None,
+                   help="space of the stored normals (default view)")
+    e.add_argument("--normal-encoding", choices=("signed", "unit"), default=None,
+                   help="signed [-1, 1] or unit [0, 1] stored normals (default signed; unit for PNG maps)")
+    e.add_argument("--convention", choices=("vobscure", "opengl", "directx"), default=None,
+                   help="axis convention of view-space normals (default vobscure)")
+    e.add_argument("--background", type=float, default=None, metavar="Z",
+                   help="depth value of background pixels (e.g. 1e10 for Blender); default inf")
+    e.add_argument("--depth-channel", default=None, metavar="NAME", help="EXR channel or NPZ array of the depth")
+    e.add_argument("--normal-channels", default=None, metavar="NAME",
+                   help="EXR layer (e.g. 'View Layer.Normal') or X,Y,Z channel names, or NPZ array")
+    e.add_argument("--depth-scale", type=float, default=None, metavar="S",
+                   help="scene units per stored depth unit (required for PNG depth)")
+    e.add_argument("--method", default="line:9", metavar="NAME[:SAMPLES[:FETCH]]",
+                   help="one screen-space configuration from vobscure.methods (default line:9)")
+    e.add_argument("--radius", type=float, required=True, help="ball radius in scene units")
+    e.add_argument("--normal-clamp", action="store_true", help="half-ball VO (Sec. 4.4)")
+    e.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), scene units")
+    e.add_argument("--blur", action="store_true", help="edge-aware bilateral blur of the result (Sec. 4.1)")
+    e.add_argument("--seed", type=int, default=0, help="random seed, the same for every frame (default 0)")
+    e.add_argument("--out", type=Path, required=True, metavar="PATH",
+                   help="output .exr/.png/.npy/.pfm; for several frames a directory (EXR files "
+                        "<frame>_vo.exr) or a pattern with {stem}, e.g. 'vo/{stem}.png'")
+    e.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG bit depth (default 8)")
+    e.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+
+
+def _frame_paths(spec: str, what: str) -> list[Path]:
+    """A file, a directory of frames (sorted) or a glob (sorted)."""
+    import glob
+
+    from .io import SUFFIXES
+
+    path = Path(spec)
+    if path.is_dir():
+        found = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in SUFFIXES)
+        if not found:
+            raise ValueError(f"--{what} {spec}: the directory holds no {'/'.join(SUFFIXES)} files")
+        return found
+    if any(c in spec for c in "*?["):
+        found = sorted(Path(p) for p in glob.glob(spec) if Path(p).is_file())
+        if not found:
+            raise FileNotFoundError(f"--{what} {spec!r}: the pattern matches no file")
+        return found
+    if not path.exists():
+        raise FileNotFoundError(f"--{what}: no such file: {spec}")
+    return [path]
+
+
+def _matrix_arg(path: Path, name: str) -> np.ndarray:
+    if not path.is_file():
+        raise FileNotFoundError(f"--{name}: no such file: {path}")
+    try:
+        m = np.loadtxt(path, dtype=np.float64, delimiter=None, ndmin=2)
+    except ValueError as exc:
+        raise ValueError(f"--{name} {path}: not a matrix of numbers ({exc})") from None
+    if m.shape != (4, 4) or not np.isfinite(m).all():
+        raise ValueError(f"--{name} {path}: expected a 4x4 matrix of finite numbers, got shape {m.shape}")
+    return m
+
+
+def _estimate_camera(args, size, pose):
+    """The camera of the frames: --fov (Camera.look_at), --intrinsics or --projection."""
+    from .camera import Camera
+
+    if args.fov is not None:
+        if pose is None:  # at the origin, looking down +z with y up (view space = this frame)
+            return Camera.look_at((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), up=(0.0, 1.0, 0.0), size=size, fov_y=args.fov)
+        eye, up, back = pose[:3, 3], pose[:3, 1], pose[:3, 2]   # OpenGL: columns right, up, back, eye
+        return Camera.look_at(eye, eye - back, up=up, size=size, fov_y=args.fov)
+    vobscure_pose = None if pose is None else pose @ np.diag([1.0, 1.0, -1.0, 1.0])  # columns right, up, forward
+    if args.intrinsics is not None:
+        fx, fy, cx, cy = args.intrinsics
+        return Camera.from_intrinsics(fx, fy, cx, cy, size, pose=vobscure_pose)
+    matrix = _matrix_arg(args.projection, "projection")
+    return Camera.from_projection(matrix, size, convention=args.projection_convention, pose=vobscure_pose)
+
+
+def _estimate_main(args) -> int:
+    from tqdm import tqdm
+
+    from . import methods
+    from .gbuffer import GBuffer
+    from .io import read_buffers, write_image
+    from .metrics import flicker
+    from .screenspace import bilateral_blur
+
+    depth_paths = _frame_paths(args.depth, "depth")
+    normal_paths = _frame_paths(args.normal, "normal") if args.normal is not None else [None] * len(depth_paths)
+    if len(normal_paths) != len(depth_paths):
+        raise ValueError(f"--depth names {len(depth_paths)} frame(s) but --normal {len(normal_paths)}; "
+                         f"give one normal file per depth file")
+    configs = methods.parse(args.method)
+    if len(configs) != 1:
+        raise ValueError(f"--method takes one configuration, got {len(configs)}: {args.method!r}")
+    config = configs[0]
+    if config.spec.needs_scene:
+        raise ValueError(f"--method {config.label}: this model needs the scene's description, not a G-buffer; "
+                         f"choose a screen-space method: "
+                         f"{', '.join(n for n in methods.names() if not methods.get(n).needs_scene)}")
+    if not (np.isfinite(args.radius) and args.radius > 0):
+        raise ValueError(f"--radius must be a finite number > 0, got {args.radius}")
+    pose = _matrix_arg(args.pose, "pose") if args.pose is not None else None
+    many = len(depth_paths) > 1
+    outs = _estimate_outputs(args.out, depth_paths)
+    channels = args.normal_channels
+    if channels is not None and "," in channels:
+        channels = tuple(c.strip() for c in channels.split(","))
+    convert = {k: v for k, v in (("near", args.near), ("far", args.far), ("normal_space", args.normal_space),
+                                 ("normal_encoding", args.normal_encoding), ("convention", args.convention),
+                                 ("background", args.background)) if v is not None}
+    if args.normal_space == "world" and pose is None and args.intrinsics is None and args.projection is None:
+        raise ValueError("--normal-space world needs the camera's --pose")
+
+    frames, camera, started = [], None, time.perf_counter()
+    bar = tqdm(total=len(depth_paths), desc="estimate", unit="frame", disable=args.quiet or not many)
+    for depth_path, normal_path, out in zip(depth_paths, normal_paths, outs):
+        depth, normal, found = read_buffers(depth_path, normal_path=normal_path, depth_channel=args.depth_channel,
+                                            normal_channels=channels, depth_scale=args.depth_scale)
+        H, W = depth.shape
+        if camera is None:
+            camera = _estimate_camera(args, (W, H), pose)
+        elif camera.size != (W, H):
+            raise ValueError(f"{depth_path} is {W}x{H} pixels but the first frame is "
+                             f"{camera.size[0]}x{camera.size[1]}; every frame must have one size")
+        stages = tqdm(total=3 + args.blur, desc=depth_path.name, leave=False,
+                      disable=args.quiet or many or H * W < ESTIMATE_PROGRESS_PIXELS)
+        kwargs = dict(convert)
+        if found.get("normal_encoding") and "normal_encoding" not in kwargs:
+            kwargs["normal_encoding"] = found["normal_encoding"]
+        gb = GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=args.depth_kind, **kwargs)
+        stages.update()
+        v = config.run(gb, radius=args.radius, normal_clamp=args.normal_clamp, thickness=args.thickness,
+                       seed=args.seed)
+        v = np.asarray(getattr(v, "value", v))
+        stages.update()
+        if args.blur:
+            v = bilateral_blur(v, gb)
+            stages.update()
+        write_image(out, v, bits=args.bits) if out.suffix.lower() == ".png" else write_image(out, v)
+        stages.update()
+        stages.close()
+        frames.append(v)
+        bar.update()
+    bar.close()
+    seconds = time.perf_counter() - started
+    if not args.quiet:
+        last = frames[-1]
+        print(f"{config.label} radius {args.radius:g}{' normal clamp' if args.normal_clamp else ''}"
+              f"{'' if args.thickness is None else f' thickness {args.thickness:g}'}{' blurred' if args.blur else ''}: "
+              f"{len(frames)} frame(s) of {camera.width}x{camera.height}, {seconds:.2f} s")
+        print(f"  mean visibility {np.nanmean(last):.4f} over {int(np.isfinite(last).sum())} covered pixels "
+              f"(last frame)" if np.isfinite(last).any() else "  no covered pixel (background only)")
+        if not many:
+            print(f"  wrote {outs[0]}")
+        else:
+            print(f"  wrote {len(outs)} files: {outs[0]} ... {outs[-1]}")
+    if many:
+        f = flicker(np.stack(frames))
+        if not args.quiet:
+            print(f"  flicker: mean |V(t+1) - V(t)| = {f.estimate_change:.5f} over {f.pairs} pixel pairs "
+                  f"({f.ignored} undefined skipped); it includes the real change of the frames (no reference "
+                  f"to subtract)")
+    return 0
+
+
+def _estimate_outputs(out: Path, depth_paths) -> list[Path]:
+    from .io import SUFFIXES
+
+    if len(depth_paths) == 1 and "{stem}" not in str(out):
+        if out.is_dir() or str(out).endswith(("/", os.sep)):
+            return [out / f"{depth_paths[0].stem}_vo.exr"]
+        if out.suffix.lower() not in (".exr", ".png", ".npy", ".pfm"):
+            raise ValueError(f"--out {out}: the suffix must be .exr, .png, .npy or .pfm")
+        if out.resolve() == depth_paths[0].resolve():
+            raise ValueError(f"--out {out}: would overwrite the input frame")
+        return [out]
+    if "{stem}" in str(out):
+        outs = [Path(str(out).replace("{stem}", p.stem)) for p in depth_paths]
+        if outs[0].suffix.lower() not in (".exr", ".png", ".npy", ".pfm"):
+            raise ValueError(f"--out {out}: the suffix must be .exr, .png, .npy or .pfm")
+    else:
+        if out.suffix.lower() in SUFFIXES and not out.is_dir():
+            raise ValueError(f"--out {out}: {len(depth_paths)} frames need a directory or a pattern with "
+                             f"{{stem}}, e.g. 'vo/{{stem}}.exr'")
+        outs = [out / f"{p.stem}_vo.exr" for p in depth_paths]
+    if len(set(outs)) != len(outs):
+        raise ValueError(f"--out {out}: two frames would write the same file (frames with the same name)")
+    resolved = {p.resolve() for p in depth_paths}
+    if any(o.resolve() in resolved for o in outs):
+        raise ValueError(f"--out {out}: would overwrite an input frame")
+    return outs
 
 
 def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao", radius=None,
@@ -248,6 +482,12 @@ def main(argv=None) -> int:
             doc = (getattr(scenes, name).__doc__ or "").strip().splitlines()
             print(f"{name:16s} {doc[0] if doc else ''}")
         return 0
+    if args.command == "estimate":
+        try:
+            return _estimate_main(args)
+        except (ValueError, FileNotFoundError) as exc:
+            print(f"vobscure estimate: error: {exc}", file=sys.stderr)
+            return 2
     if args.command in ("compare", "figures"):
         try:
             return _compare_main(args) if args.command == "compare" else _figures_main(args)
