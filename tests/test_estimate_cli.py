@@ -174,3 +174,12 @@ def test_out_must_fit_the_frames(frame, tmp_path, capsys):
     assert status == 2 and "the suffix must be .exr, .png, .npy or .pfm" in err
     status, _, err = _run(capsys, "--depth", frame["exr"], "--fov", 40, "--radius", RADIUS, "--out", frame["exr"])
     assert status == 2 and "would overwrite the input frame" in err
+
+
+def test_channels_named_on_the_command_line(frame, tmp_path, capsys):
+    names = ",".join(f"View Layer.Normal.{a}" for a in "XYZ")
+    status, _, err = _run(capsys, "--depth", frame["exr"], "--fov", frame["gb"].camera.fov_y,
+                          *_blender_args(frame), "--depth-channel", "View Layer.Depth.Z",
+                          "--normal-channels", names, "--radius", RADIUS, "--quiet", "--out", tmp_path / "v.npy")
+    assert status == 0, err
+    np.testing.assert_allclose(np.load(tmp_path / "v.npy"), _expected(frame["gb"]), atol=TOL)

@@ -364,3 +364,27 @@ def test_docs_exr_section_runs(tmp_path, monkeypatch):
         exec(compile(block, str(DOCS / "own-buffers.md"), "exec"), namespace)
     assert (tmp_path / "vo.exr").is_file() and (tmp_path / "vo.png").is_file()
     assert np.nanmax(np.abs(namespace["v"] - namespace["v_original"])) <= ROUND_TRIP_TOL
+
+
+# --------------------------------------------------------------------------- more layouts
+def test_multipart_half_float_exr(tmp_path):
+    """Channels of a named part are found as '<part>.<channel>'; half floats become float32."""
+    d = np.full((2, 3), 3.0, np.float16)
+    parts = [OpenEXR.Part({}, {"R": d}, "beauty"),
+             OpenEXR.Part({}, {"Z": d, "N.X": d * 0, "N.Y": d * 0, "N.Z": -d / 3}, "geometry")]
+    OpenEXR.File(parts).write(str(tmp_path / "m.exr"))
+    assert "geometry.Z" in vio.exr_channels(tmp_path / "m.exr")
+    depth, normal, found = vio.read_buffers(tmp_path / "m.exr", depth_channel="geometry.Z")
+    assert depth.dtype == np.float32 and depth[0, 0] == 3.0
+    assert normal[0, 0].tolist() == [0, 0, -1]
+
+
+def test_png_normal_map_is_read_as_unit_encoding(tmp_path):
+    import imageio.v3 as iio
+
+    np.save(tmp_path / "d.npy", np.ones((2, 2)))
+    rgb = np.zeros((2, 2, 3), np.uint8)
+    rgb[..., 2] = 255
+    iio.imwrite(tmp_path / "n.png", rgb)
+    _, normal, found = vio.read_buffers((tmp_path / "d.npy", tmp_path / "n.png"))
+    assert found["normal_encoding"] == "unit" and normal[0, 0].tolist() == [0, 0, 1]
