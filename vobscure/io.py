@@ -148,13 +148,18 @@ def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_
     """
     depth_path, normal_path = _paths(path_or_paths, normal_path)
     found: dict = {}
-    cache: dict = {}
-    depth = _read_depth(depth_path, depth_channel, depth_scale, found, cache)
-    if normal_path is None:
-        normal = _read_normal(depth_path, normal_channels, found, cache, required=normal_channels is not None,
-                              same_file=True)
-    else:
-        normal = _read_normal(normal_path, normal_channels, found, cache, required=True, same_file=False)
+    cache: dict = {}   # each file is opened once; .npz archives are closed below
+    try:
+        depth = _read_depth(depth_path, depth_channel, depth_scale, found, cache)
+        if normal_path is None:
+            normal = _read_normal(depth_path, normal_channels, found, cache, required=normal_channels is not None,
+                                  same_file=True)
+        else:
+            normal = _read_normal(normal_path, normal_channels, found, cache, required=True, same_file=False)
+    finally:
+        for value in cache.values():
+            if hasattr(value, "close"):
+                value.close()
     if normal is not None and normal.shape[:2] != depth.shape:
         raise ValueError(f"the normals {found['normal']} are {normal.shape[1]}x{normal.shape[0]} pixels but "
                          f"the depth {found['depth']} is {depth.shape[1]}x{depth.shape[0]}; they must match")
