@@ -122,6 +122,9 @@ def test_a_sequence_runs_frame_by_frame_and_reports_flicker(frame, tmp_path, cap
     written = sorted(p.name for p in (tmp_path / "vo").iterdir())
     assert written == ["f000_vo.exr", "f001_vo.exr", "f002_vo.exr"]
     assert "flicker: mean |V(t+1) - V(t)| = 0.00000" in stdout
+    status, stdout, _ = _run(capsys, "--depth", frames, "--fov", 40, *_blender_args(frame), "--radius", RADIUS,
+                             "--flicker-reference", 64, "--out", tmp_path / "vo2")
+    assert status == 0 and "flicker: 0.00000 (mean |V(t+1) - V(t)| = 0.00000 less the reference's 0.00000" in stdout
     # a glob and a {stem} pattern; another frame makes the change non-zero
     shutil.copy(frame["exr"], tmp_path / "g0.exr")
     vio.write_gbuffer(tmp_path / "g1.exr", frame["gb"], world_normals=True)  # inf background

@@ -217,6 +217,10 @@ def _estimate_parser(sub) -> None:
     e.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), scene units")
     e.add_argument("--blur", action="store_true", help="edge-aware bilateral blur of the result (Sec. 4.1)")
     e.add_argument("--seed", type=int, default=0, help="random seed, the same for every frame (default 0)")
+    e.add_argument("--flicker-reference", type=int, default=0, metavar="SAMPLES",
+                   help="sequences: also compute the converged screen-space VO (vo_reference) with SAMPLES "
+                        "samples per frame and subtract its frame-to-frame change from the flicker, as "
+                        "`compare --orbit` does (default 0: report the raw change)")
     e.add_argument("--out", type=Path, required=True, metavar="PATH",
                    help="output .exr/.png/.npy/.pfm; for several frames a directory (EXR files "
                         "<frame>_vo.exr) or a pattern with {stem}, e.g. 'vo/{stem}.png'")
@@ -282,7 +286,7 @@ def _estimate_main(args) -> int:
     from .gbuffer import GBuffer
     from .io import read_buffers, write_image
     from .metrics import flicker
-    from .screenspace import bilateral_blur
+    from .screenspace import bilateral_blur, vo_reference
 
     depth_paths = _frame_paths(args.depth, "depth")
     normal_paths = _frame_paths(args.normal, "normal") if args.normal is not None else [None] * len(depth_paths)
@@ -297,6 +301,8 @@ def _estimate_main(args) -> int:
         raise ValueError(f"--method {config.label}: this model needs the scene's description, not a G-buffer; "
                          f"choose a screen-space method: "
                          f"{', '.join(n for n in methods.names() if not methods.get(n).needs_scene)}")
+    if args.flicker_reference < 0:
+        raise ValueError(f"--flicker-reference must be >= 0 samples, got {args.flicker_reference}")
     if not (np.isfinite(args.radius) and args.radius > 0):
         raise ValueError(f"--radius must be a finite number > 0, got {args.radius}")
     pose = _matrix_arg(args.pose, "pose") if args.pose is not None else None
@@ -311,7 +317,7 @@ def _estimate_main(args) -> int:
     if args.normal_space == "world" and pose is None and args.intrinsics is None and args.projection is None:
         raise ValueError("--normal-space world needs the camera's --pose")
 
-    frames, camera, started = [], None, time.perf_counter()
+    frames, references, camera, started = [], [], None, time.perf_counter()
     bar = tqdm(total=len(depth_paths), desc="estimate", unit="frame", disable=args.quiet or not many)
     for depth_path, normal_path, out in zip(depth_paths, normal_paths, outs):
         depth, normal, found = read_buffers(depth_path, normal_path=normal_path, depth_channel=args.depth_channel,
@@ -340,6 +346,10 @@ def _estimate_main(args) -> int:
         stages.update()
         stages.close()
         frames.append(v)
+        if many and args.flicker_reference:
+            references.append(vo_reference(gb, radius=args.radius, samples=args.flicker_reference,
+                                           normal_clamp=args.normal_clamp, thickness=args.thickness,
+                                           seed=args.seed).value)
         bar.update()
     bar.close()
     seconds = time.perf_counter() - started
@@ -354,12 +364,17 @@ def _estimate_main(args) -> int:
             print(f"  wrote {outs[0]}")
         else:
             print(f"  wrote {len(outs)} files: {outs[0]} ... {outs[-1]}")
-    if many:
-        f = flicker(np.stack(frames))
-        if not args.quiet:
+    if many and not args.quiet:
+        if references:
+            f = flicker(np.stack(frames), np.stack(references))
+            print(f"  flicker: {f.value:.5f} (mean |V(t+1) - V(t)| = {f.estimate_change:.5f} less the "
+                  f"reference's {f.reference_change:.5f}, vo_reference with {args.flicker_reference} samples) "
+                  f"over {f.pairs} pixel pairs ({f.ignored} skipped)")
+        else:
+            f = flicker(np.stack(frames))
             print(f"  flicker: mean |V(t+1) - V(t)| = {f.estimate_change:.5f} over {f.pairs} pixel pairs "
-                  f"({f.ignored} undefined skipped); it includes the real change of the frames (no reference "
-                  f"to subtract)")
+                  f"({f.ignored} undefined skipped); it includes the real change of the frames "
+                  f"(--flicker-reference SAMPLES subtracts it)")
     return 0
 
 
