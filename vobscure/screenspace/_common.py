@@ -15,7 +15,12 @@ Used by the modules of :mod:`vobscure.screenspace` only (tests and benchmarks al
 the estimators' public arguments are documented on the estimators.
 
 Conventions (``docs/conventions.md``): view space, z = depth > 0 in front; continuous pixel
-coordinates (x, y) with pixel (i, j) centred at (j + 0.5, i + 0.5). NaN depths are treated
+coordinates (x, y) with pixel (i, j) centred at (j + 0.5, i + 0.5). Cameras are general
+pinholes (:meth:`vobscure.Camera.from_intrinsics`): a principal point (cx, cy) anywhere and
+focal lengths fx, fy that may differ, so a view-space disk offset (dx, dy) at depth z moves
+the projection by (fx dx / z, -fy dy / z) pixels; the projected radius therefore has an x
+and a y extent (:attr:`Pixels.radius_px_x`, :attr:`Pixels.radius_px`), the same array when
+fx = fy. NaN depths are treated
 as background (+inf): the estimators return NaN there and treat such pixels as empty space
 when a sample lands on them.
 """
@@ -48,22 +53,35 @@ class Pixels:
 
     index: np.ndarray        # (k,) flat indices into the (H, W) image
     z: np.ndarray            # (k,) view-space depth
-    radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels
+    radius_px: np.ndarray    # (k,) the world radius projected at the pixel's depth, in pixels, along y
     depth: np.ndarray        # (H, W) float64 view of the depth buffer (NaN -> +inf)
     shape: tuple
     row: np.ndarray          # (k,) pixel row and column
     col: np.ndarray
     depth_flat: np.ndarray   # (H * W,) float64 copy of the depth buffer, for flat gathers
     perspective: bool
-    focal: float | None      # pixels per unit at depth 1 (perspective) or per unit (ortho)
+    fx: float                # pixels per unit at depth 1 (perspective) or per unit (ortho), along x
+    fy: float                # the same along y (rows down: a view +y offset moves up the image)
+    cx: float                # principal point (pixel coordinates, from the top-left corner)
+    cy: float
+    radius_px_x: np.ndarray = None   # (k,) the projected radius along x; radius_px itself when fx == fy
     normal_image: np.ndarray = field(repr=False, default=None)   # (H * W, 3) view-space normals
+
+    def __post_init__(self):
+        if self.radius_px_x is None:
+            self.radius_px_x = self.radius_px
+
+    @property
+    def radius_px_max(self) -> np.ndarray:
+        """(k,) the larger of the projected radius's x and y extents (pixels)."""
+        return self.radius_px if self.radius_px_x is self.radius_px else np.maximum(self.radius_px_x, self.radius_px)
 
     @cached_property
     def ray(self) -> tuple[np.ndarray, np.ndarray]:
         """(x / z, y / z) of the pixels' view rays (perspective), or their view-space (x, y)
-        (orthographic): the pixel centre's offset from the image centre over ``focal``."""
-        H, W = self.shape
-        return (self.col + (0.5 - W / 2.0)) / self.focal, ((H / 2.0 - 0.5) - self.row) / self.focal
+        (orthographic): the pixel centre's offset from the principal point (cx, cy) over
+        ``fx`` and ``fy``."""
+        return (self.col + (0.5 - self.cx)) / self.fx, ((self.cy - 0.5) - self.row) / self.fy
 
     @cached_property
     def p(self) -> np.ndarray:
@@ -137,14 +155,17 @@ def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:
     H, W = gb.depth.shape
     i, j = np.divmod(index, W)
     z = depth64[index]
+    fx, fy = cam.fx, cam.fy
+    # a view-space offset (dx, dy) at depth z moves the projection by (fx dx / z, -fy dy / z)
+    # pixels (perspective), (fx dx, -fy dy) (orthographic, fx = fy = H / ortho_height)
     if cam.is_perspective:
-        f = cam.focal_length_px
-        radius_px = (radius * f) / z
+        radius_px = (radius * fy) / z
+        radius_px_x = radius_px if fx == fy else (radius * fx) / z
     else:
-        f = H / cam.ortho_height
-        radius_px = np.full(len(index), radius * f)
+        radius_px = radius_px_x = np.full(len(index), radius * fy)
     return Pixels(index=index, z=z, radius_px=radius_px, depth=depth64.reshape(H, W), shape=(H, W),
-                  row=i, col=j, depth_flat=depth64, perspective=cam.is_perspective, focal=float(f),
+                  row=i, col=j, depth_flat=depth64, perspective=cam.is_perspective, fx=float(fx),
+                  fy=float(fy), cx=float(cam.cx), cy=float(cam.cy), radius_px_x=radius_px_x,
                   normal_image=gb.normal.reshape(-1, 3))
 
 
@@ -237,19 +258,23 @@ def reflect(s: np.ndarray, v: np.ndarray | None, count: int) -> np.ndarray:
 def disk_pixels(px: Pixels, xy: np.ndarray, *, snap: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pixel coordinates of the disk points p + R (x, y, 0) for unit-disk offsets (k, 2).
 
+    The offset (x, y) moves the projection by (R_x x, -R_y y) pixels, R_x and R_y the
+    projected radius along x and y (:attr:`Pixels.radius_px_x`, :attr:`Pixels.radius_px`;
+    equal for square pixels).
+
     With ``snap`` the points move to the centre of the pixel they fall in and the offsets
     are recomputed from there, so that the line at (x, y) and the depth read for it belong
     to the same place: a nearest fetch then describes a plane exactly (the depth at a pixel
     centre is the plane's depth there), and a point-symmetric pattern stays symmetric
     (rounding an integer-centred offset is odd). Returns x, y and the (k, 2) offsets used.
     """
-    x = px.center[:, 0] + px.radius_px * xy[:, 0]
+    x = px.center[:, 0] + px.radius_px_x * xy[:, 0]
     y = px.center[:, 1] - px.radius_px * xy[:, 1]
     if not snap:
         return x, y, xy
     x = np.floor(x) + 0.5
     y = np.floor(y) + 0.5
-    xy = np.column_stack([(x - px.center[:, 0]) / px.radius_px, (px.center[:, 1] - y) / px.radius_px])
+    xy = np.column_stack([(x - px.center[:, 0]) / px.radius_px_x, (px.center[:, 1] - y) / px.radius_px])
     return x, y, xy
 
 
@@ -308,7 +333,8 @@ class PaddedDepth:
 
 
 def padded_depth(depth64, shape, radius_px_max: float, offscreen: str):
-    """A :class:`PaddedDepth` wide enough for taps within ``radius_px_max``, or None if too wide."""
+    """A :class:`PaddedDepth` wide enough for taps within ``radius_px_max`` pixels along
+    either axis (the larger of the projected radius's x and y extents), or None if too wide."""
     pad = int(np.ceil(radius_px_max)) + 2
     return PaddedDepth(depth64, shape, pad, offscreen) if pad <= MAX_PAD else None
 

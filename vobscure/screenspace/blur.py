@@ -94,6 +94,12 @@ def bilateral_blur(visibility, gbuffer, *, radius_px=4, sigma_spatial=None, sigm
     Across a 50% depth jump (z_q = 1.5 z_p) the default weight is exp(-50); from the far
     side (z_q = z_p / 1.5) it is exp(-22.2), about 2e-10.
 
+    *Cameras.* The blur reads the images only, never the camera: a principal point anywhere
+    changes nothing. The window and ``sigma_spatial`` are in pixels, so with non-square
+    pixels (``camera.fx != camera.fy``) the window covers fx / fy times as much of the view
+    vertically as horizontally (per unit of view angle); give ``radius_px`` for the axis
+    that matters.
+
     *Masking.* Neighbours that are background, NaN or outside the image get weight zero and
     the weights are renormalized over the rest, so edges of the image and of the coverage
     are handled the same way. The centre pixel always has weight 1, so every defined pixel

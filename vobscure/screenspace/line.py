@@ -142,7 +142,8 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     gbuffer : GBuffer
         The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
         normals (H, W, 3) (facing the camera, n_z < 0), from
-        :func:`vobscure.render_gbuffer`; perspective or orthographic camera. The normals
+        :func:`vobscure.render_gbuffer`; perspective (any pinhole: principal point
+        anywhere, fx != fy allowed) or orthographic camera. The normals
         are read only with ``normal_clamp``.
     radius : float
         Radius R of the ball around each pixel's point, in world units (> 0).
@@ -260,7 +261,9 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         return out.reshape(H, W)
     # the largest projected radius decides how wide a border the taps can reach
     z_min = float(np.min(depth64[index]))
-    padded = C.padded_depth(depth64, (H, W), radius * float(gb.camera.pixels_per_unit(z_min)), offscreen)
+    # (the larger of its x and y extents: fx != fy for non-square pixels)
+    padded = C.padded_depth(depth64, (H, W), radius * float(np.max(gb.camera.pixels_per_unit_xy(z_min))),
+                            offscreen)
     antipodal = _exactly_antipodal(pattern)
     for chunk, v in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
@@ -308,7 +311,7 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     so it is the constant sum k_s z_s and is not accumulated per pixel.
     """
     k = len(px.index)
-    r = px.radius_px
+    r_x, r_y = px.radius_px_x, px.radius_px      # the projected radius along x and y (pixels)
     z = px.z
     base = C.padded_base(px, padded) if padded is not None else None
     dj, e, t, d = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
@@ -319,9 +322,9 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     den = np.zeros(k) if (not simple or (normal_clamp and not antipodal)) else None
     if normal_clamp:
         # tangent plane crossing z_plane = gx x + gy y (Sec. 4.4, footnote 4), per tap pixel:
-        # x = dj / r, y = e / r
+        # x = dj / r_x, y = e / r_y
         gx, gy = C.tangent_plane_coefficients(px)
-        gx, gy = gx / r, gy / r
+        gx, gy = gx / r_x, gy / r_y
     if px.perspective:
         a, b = z / radius, z * z / radius          # warp: d_r = a - b / d (C.warp)
     raw = np.empty(k) if thickness is not None else None
@@ -335,9 +338,9 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 continue        # a point on the rim has no chord
             z_s = float(np.sqrt(z_s2))
             # the pixel the disk point p + R (x, y, 0) falls in
-            np.multiply(r, x, out=dj)
+            np.multiply(r_x, x, out=dj)
             np.rint(dj, out=dj)
-            np.multiply(r, y, out=e)
+            np.multiply(r_y, y, out=e)
             np.rint(e, out=e)
             C.nearest_taps(px, dj, e, offscreen=offscreen, padded=padded, base=base, out=d, scratch=t)
             if raw is not None:

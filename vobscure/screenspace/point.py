@@ -78,7 +78,6 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
     vc = None if v is None else [np.ascontiguousarray(v[:, a]) for a in range(3)]
     nc = [np.ascontiguousarray(px.n[:, a]) for a in range(3)]
     pc = [np.ascontiguousarray(px.p[:, a]) for a in range(3)]
-    H, W = px.shape
     num = np.zeros(k)
     den = np.zeros(k)
     for s, w in zip(pattern.points, pattern.weights):
@@ -106,12 +105,15 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
             m = 2.0 * np.minimum(o[0] * nc[0] + o[1] * nc[1] + o[2] * nc[2], 0.0)
             o = [o[a] - m * nc[a] for a in range(3)]
         qx, qy, z = (pc[a] + radius * o[a] for a in range(3))
+        # the camera's projection (Camera.project): x = cx + fx X / Z, y = cy - fy Y / Z
+        # (perspective), x = cx + fx X, y = cy - fy Y (orthographic)
         if px.perspective:
             with np.errstate(divide="ignore", invalid="ignore"):
-                inv = px.focal / z
-                x, y = W / 2.0 + qx * inv, H / 2.0 - qy * inv
+                inv_x = px.fx / z
+                inv_y = inv_x if px.fy == px.fx else px.fy / z
+                x, y = px.cx + qx * inv_x, px.cy - qy * inv_y
         else:
-            x, y = W / 2.0 + px.focal * qx, H / 2.0 - px.focal * qy
+            x, y = px.cx + px.fx * qx, px.cy - px.fy * qy
         d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
         # occupied = 1 - O(x) of Sec. 4 (O = 1 in empty space): behind the depth buffer,
         # within the thickness when one is given (Sec. 4.3); z is the sample's view depth X_z
@@ -145,7 +147,8 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
     gbuffer : GBuffer
         The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
         normals (H, W, 3) (facing the camera, n_z < 0), from
-        :func:`vobscure.render_gbuffer`; perspective or orthographic camera. The normals
+        :func:`vobscure.render_gbuffer`; perspective (any pinhole: principal point
+        anywhere, fx != fy allowed) or orthographic camera. The normals
         are read only with ``normal_clamp``.
     radius : float
         Radius R of the ball around each pixel's point, in world units (> 0).
