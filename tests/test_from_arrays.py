@@ -309,6 +309,13 @@ def test_derived_normals_on_the_crease_within_the_measured_error(scene):
     assert np.median(np.abs(a - b)) < 1e-4 and np.mean(np.abs(a - b) > 0.01) < DERIVED_FRACTION_OVER_5DEG
 
 
+def test_no_depth_only_gbuffer():
+    cam = vo.Camera.look_at((0, 0, 5), (0, 0, 0), size=(5, 4))
+    with pytest.raises(ValueError, match="needs normals.*from_arrays.*derives them"):
+        GBuffer(cam, depth=np.ones((4, 5)), normal=None, valid=np.ones((4, 5), bool),
+                primitive=np.zeros((4, 5), int), hits=None)
+
+
 def test_isolated_pixel_faces_the_camera():
     cam = vo.Camera.look_at((0, 0, 5), (0, 0, 0), size=(5, 4), fov_y=40.0)
     depth = np.full((4, 5), np.inf)

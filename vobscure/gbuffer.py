@@ -131,6 +131,9 @@ class GBuffer:
 
     def __init__(self, camera, *, depth, normal, valid, primitive, hits, dtype=np.float64,
                  view_to_world=None, conversion=None):
+        if normal is None:
+            raise ValueError("a GBuffer needs normals (normal_clamp and the ground truth read them); "
+                             "GBuffer.from_arrays(depth, camera=...) derives them from the depth")
         self.camera = camera
         self.dtype = np.dtype(dtype)
         self.depth = _frozen(np.asarray(depth, dtype=self.dtype))
@@ -811,21 +814,28 @@ def _derive_normals(camera, depth, covered, *, rays=None):
             central = have_f & have_b & (c <= CENTRAL_RATIO * np.minimum(e_f, e_b))
             forward = ~central & have_f & (e_f <= e_b)
             backward = ~central & ~forward & have_b
-            t = np.full((H, W, 3), np.nan)
+            # a blend of the backward and forward differences: (1/2, 1/2) central, (0, 1)
+            # forward, (1, 0) backward, (0, 0) none (no covered neighbour)
+            a = np.where(central, 0.5, np.where(backward, 1.0, 0.0))
+            b = np.where(central, 0.5, np.where(forward, 1.0, 0.0))
             P0, Pm, Pf = P, sh(Pp, -1), sh(Pp, 1)
-            t[central] = 0.5 * (Pf[central] - Pm[central])
-            t[forward] = Pf[forward] - P0[forward]
-            t[backward] = P0[backward] - Pm[backward]
+            t = np.empty((3, H, W))
+            for c_ in range(3):
+                back_ = np.where(a > 0, P0[..., c_] - Pm[..., c_], 0.0)
+                fore_ = np.where(b > 0, Pf[..., c_] - P0[..., c_], 0.0)
+                t[c_] = a * back_ + b * fore_
         return t, central | forward | backward
 
     tx, okx = tangent(1)
     ty, oky = tangent(0)
-    n = np.cross(tx, ty)
+    n = np.stack([tx[1] * ty[2] - tx[2] * ty[1],     # tx x ty, component by component
+                  tx[2] * ty[0] - tx[0] * ty[2],
+                  tx[0] * ty[1] - tx[1] * ty[0]], axis=-1)
     ok = covered & okx & oky
-    length = np.linalg.norm(n, axis=-1)
-    ok &= length > 0
-    out = np.zeros((H, W, 3))
-    out[ok] = n[ok] / length[ok, None]
+    with np.errstate(invalid="ignore"):
+        length = np.sqrt(np.einsum("...i,...i->...", n, n))
+        ok &= length > 0
+        out = np.where(ok[..., None], n / np.where(ok, length, 1.0)[..., None], 0.0)
     # no neighbour along an axis: face the camera
     undetermined = covered & ~ok
     d = np.asarray(rays, dtype=np.float64)
