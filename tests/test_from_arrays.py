@@ -171,6 +171,17 @@ def test_linear_identity_gives_the_same_estimate_exactly(rendered):
     np.testing.assert_allclose(vo.vo_area(back, radius=RADIUS), vo.vo_area(gb, radius=RADIUS), atol=1e-12)
 
 
+def test_ground_truth_reads_the_derived_world_data(scene, rendered):
+    gb = rendered
+    back = GBuffer.from_arrays(gb.depth, gb.normal, camera=gb.camera)
+    a = vo.ground_truth(scene, gb, quantity="ao", radius=RADIUS, rays=32, seed=1)
+    b = vo.ground_truth(scene, back, quantity="ao", radius=RADIUS, rays=32, seed=1)
+    # the same rays from points equal to ~1e-7: the same hits on the crease's faces
+    np.testing.assert_allclose(b.value, a.value, atol=1e-12)
+    v = vo.bilateral_blur(vo.vo_line(back, radius=RADIUS), back)
+    np.testing.assert_allclose(v, vo.bilateral_blur(vo.vo_line(gb, radius=RADIUS), gb), atol=1e-12)
+
+
 def test_reversed_infinite_far(rendered):
     gb = rendered
     z = np.where(gb.valid, NEAR / gb.depth, 0.0)        # reversed-Z, infinite far: z_r = n / z
