@@ -370,7 +370,8 @@ class Camera:
             ``(width, height)`` in pixels.
         pose : (4, 4) float, optional
             View -> world matrix in vobscure's view convention: columns
-            ``(right, up, forward, eye)`` over ``(0, 0, 0, 1)``, its 3x3 part orthogonal with
+            ``(right, up, forward, eye)`` over ``(0, 0, 0, 1)``, its 3x3 part orthogonal (to
+            1e-6 per entry of R^T R - I; used as given, world -> view is its transpose) with
             determinant -1 (view space is left-handed). Default None: no pose; view-space
             methods work, world-space ones raise ValueError naming the missing pose.
         near, far : float, optional
@@ -475,12 +476,13 @@ class Camera:
 
         References
         ----------
-        .. [1] ``glFrustum``, OpenGL 2.1 Reference Pages (Khronos), and the OpenGL 4.6 Core
-           Profile specification, Sec. 13.8 "Coordinate Transformations" (the viewport
-           transform ``x_w = (p_x / 2) x_d + o_x``).
-        .. [2] ``D3DXMatrixPerspectiveOffCenterLH``, Direct3D 9 / D3DX documentation
-           (Microsoft), and "Viewports and Clipping (Direct3D 9)" / Direct3D 10+ rasterization
-           rules (pixel centres at half-integers).
+        .. [1] ``glFrustum`` (the matrix) and ``glViewport`` (window coordinates
+           ``x_w = (x_nd + 1) width / 2 + x``, ``y_w = (y_nd + 1) height / 2 + y``, y up from
+           the bottom), OpenGL 2.1 Reference Pages, Khronos Group (KhronosGroup/OpenGL-Refpages).
+        .. [2] ``D3DXMatrixPerspectiveOffCenterLH`` (the matrix), D3DX 9 documentation,
+           Microsoft; "Viewports and Clipping (Direct3D 9)" (the viewport, y down) and
+           "Coordinate Systems (Direct3D 10)" (pixel centres at half-integers; Direct3D 9's
+           are at integers, "Directly Mapping Texels to Pixels").
 
         Examples
         --------

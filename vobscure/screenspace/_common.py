@@ -71,11 +71,6 @@ class Pixels:
         if self.radius_px_x is None:
             self.radius_px_x = self.radius_px
 
-    @property
-    def radius_px_max(self) -> np.ndarray:
-        """(k,) the larger of the projected radius's x and y extents (pixels)."""
-        return self.radius_px if self.radius_px_x is self.radius_px else np.maximum(self.radius_px_x, self.radius_px)
-
     @cached_property
     def ray(self) -> tuple[np.ndarray, np.ndarray]:
         """(x / z, y / z) of the pixels' view rays (perspective), or their view-space (x, y)
