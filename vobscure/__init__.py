@@ -9,7 +9,7 @@ from importlib.metadata import PackageNotFoundError, version as _version
 from . import scenes
 from .camera import Camera
 from .estimate import Estimate
-from .gbuffer import GBuffer, render_gbuffer
+from .gbuffer import GBuffer, NormalsRenormalizedWarning, NormalsRepairedWarning, render_gbuffer
 from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric_obscurance
 from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flicker
 from .raytrace import Tracer
@@ -40,6 +40,8 @@ __all__ = [
     "Estimate",
     "Flicker",
     "GBuffer",
+    "NormalsRenormalizedWarning",
+    "NormalsRepairedWarning",
     "Scene",
     "Tracer",
     "__version__",
