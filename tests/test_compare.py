@@ -223,3 +223,46 @@ def test_verdict_also_ranks_the_sampling_error_alone():
     assert groups["screen_rmse"]["reference"] == "screen" and groups["screen_rmse"]["best"] == "point:33"
     assert groups["screen_rmse"]["front_time"] == ["line:5", "point:33"]
     assert groups["screen_rmse"]["cheapest_time"] == "point:33"        # 0.045 > 1.5 x 0.023
+
+
+def test_compare_on_a_users_gbuffer_uses_the_screen_reference_only(tmp_path):
+    """A frame from elsewhere (here: a rendered one passed as a GBuffer): no geometry, so the
+    only reference is the converged screen-space VO, and the verdict says so."""
+    gb = vo.render_gbuffer(vo.scenes.crease(), vo.scenes.crease().camera((20, 16)))
+    res = C.compare(gb, name="frame", methods="line:5,point:12", quick=True, cache=False, out=tmp_path,
+                    plots=False)
+    assert res.provenance["references"] == ["screen"] and res.provenance["scene"] == "frame"
+    assert res.summary["text"][0].startswith("A G-buffer without its scene")
+    assert {r["own_reference"] for r in res.rows} == {"screen"}
+    # the same numbers as the scene's own run of the same view
+    again = C.compare("crease", camera=gb.camera, methods="line:5,point:12", references=("screen",),
+                      quick=True, cache=False, write=False, radii=[res.rows[0]["radius"]])
+    assert [r["screen_rmse"] for r in res.rows] == [r["screen_rmse"] for r in again.rows]
+    with pytest.raises(ValueError, match="need the scene's geometry"):
+        C.compare(gb, methods="line:5", references=("screen", "ao"), quick=True, cache=False, write=False)
+    with pytest.raises(ValueError, match="orbit"):
+        C.compare(gb, methods="line:5", orbit=3, quick=True, cache=False, write=False)
+
+
+def test_cli_compare_on_a_frame_file(tmp_path, capsys):
+    """`vobscure compare --gbuffer frame.exr --fov ...`: a renderer's frame read from EXR, the
+    screen-space reference only, the same rows as compare() on the G-buffer itself."""
+    from vobscure import io as vio
+
+    cam = vo.Camera.look_at((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), size=(20, 16), fov_y=50.0)
+    scene = vo.scenes.crease()
+    view = vo.Camera.look_at((2.0, 1.5, 2.5), (0.4, 0.2, 0.0), size=(20, 16), fov_y=50.0)
+    gb = vo.render_gbuffer(scene, view)
+    vio.write_gbuffer(tmp_path / "frame.exr", gb)
+    out = tmp_path / "out"
+    assert main(["compare", "--gbuffer", str(tmp_path / "frame.exr"), "--fov", "50", "--methods", "line:5",
+                 "--quick", "--no-cache", "--out", str(out), "--radius", "0.3"]) == 0
+    assert "A G-buffer without its scene" in capsys.readouterr().out
+    rows = _rows(out / "results.csv")
+    assert [r["label"] for r in rows] == ["line:5"] and rows[0]["own_reference"] == "screen"
+    # the view-space data do not depend on the pose: the fov camera at the origin sees the same frame
+    direct = C.compare(vo.GBuffer.from_arrays(gb.depth, gb.normal, camera=cam), methods="line:5", radii=[0.3],
+                       quick=True, cache=False, write=False)
+    assert float(rows[0]["screen_rmse"]) == pytest.approx(direct.rows[0]["screen_rmse"], rel=1e-6)
+    assert main(["compare", "--gbuffer", str(tmp_path / "frame.exr"), "--out", str(out)]) == 2
+    assert "--fov, --intrinsics or --projection" in capsys.readouterr().err

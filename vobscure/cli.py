@@ -62,6 +62,10 @@ def _parser() -> argparse.ArgumentParser:
                        epilog="methods (--methods NAME[:SAMPLES[:FETCH]], from vobscure.methods):\n  "
                               + methods.describe().replace("\n", "\n  "))
     c.add_argument("--scene", default=DEFAULT_SCENE, help=f"built-in scene or mesh file (default {DEFAULT_SCENE})")
+    c.add_argument("--gbuffer", default=None, metavar="PATH",
+                   help="your own frame instead of a scene: a depth (and normal) file read as `vobscure estimate` "
+                        "reads it (give its camera with --fov, --intrinsics or --projection; the options below "
+                        "under 'your own frame'); the only reference is then the converged screen-space VO")
     c.add_argument("--camera", default=None, metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
                    help="eye and target (and vertical field of view in degrees); default the scene's camera")
     c.add_argument("--size", nargs=2, type=int, metavar=("W", "H"), default=None,
@@ -103,6 +107,10 @@ def _parser() -> argparse.ArgumentParser:
 
     _estimate_parser(sub)
 
+    frame = c.add_argument_group("your own frame (with --gbuffer)")
+    frame.add_argument("--normal", default=None, metavar="PATH", help="normal file, when not in the --gbuffer file")
+    _frame_options(frame, lens_required=False)
+
     f = sub.add_parser("figures", help="regenerate the paper figures",
                        description="Regenerate figures (one module each in vobscure.experiments.figures).")
     f.add_argument("names", nargs="*", default=["all"], metavar="NAME", help="figure names or 'all' (default)")
@@ -132,7 +140,19 @@ def _compare_main(args) -> int:
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else DEFAULT_SIZE)
     camera = _camera_arg(args.camera, size) if args.camera else None
     cache = False if args.no_cache else (args.cache if args.cache is not None else True)
-    result = compare(args.scene, camera=camera, size=size, radii=args.radius,
+    scene, name = args.scene, None
+    if args.gbuffer is not None:
+        if args.camera or args.size:
+            raise ValueError("--gbuffer brings its own view: give its camera with --fov, --intrinsics or "
+                             "--projection, not --camera or --size")
+        path = Path(args.gbuffer)
+        if not path.is_file():
+            raise FileNotFoundError(f"--gbuffer: no such file: {path}")
+        scene, camera = _frame_reader(args)(path, Path(args.normal) if args.normal else None, None)
+        name, size, camera = path.stem, None, None
+    elif args.normal is not None:
+        raise ValueError("--normal goes with --gbuffer (your own frame)")
+    result = compare(scene, name=name, camera=camera, size=size, radii=args.radius,
                      methods=args.methods, normal_clamp=args.normals, thickness=args.thickness,
                      references=tuple(args.reference) if args.reference else None,
                      repeats=args.repeats, rays=args.rays, volume_samples=args.volume_samples,
@@ -167,22 +187,10 @@ def _figures_main(args) -> int:
 ESTIMATE_PROGRESS_PIXELS = 1 << 20
 
 
-def _estimate_parser(sub) -> None:
-    e = sub.add_parser("estimate", help="estimate the VO of your own frame(s) from depth (and normal) files",
-                       formatter_class=argparse.RawDescriptionHelpFormatter,
-                       description="Estimate screen-space Volumetric Obscurance of a renderer's frame: read "
-                                   "its depth (and normals) from EXR, NPY/NPZ, PFM or 16-bit PNG files "
-                                   "(vobscure.io.read_gbuffer), run one estimator and write the visibility "
-                                   "(EXR, PNG, NPY or PFM). A directory or glob of frames runs frame by frame "
-                                   "with the same seed and reports the temporal flicker.",
-                       epilog="example:\n  vobscure estimate --depth frame.exr --fov 39.6 --radius 0.5 "
-                              "--out vo.exr\n  vobscure estimate --depth 'frames/*.exr' --fov 39.6 --radius 0.5 "
-                              "--out vo/")
-    e.add_argument("--depth", required=True, metavar="PATH",
-                   help="depth file (.exr .npy .npz .pfm .png), a directory of them or a glob in quotes")
-    e.add_argument("--normal", default=None, metavar="PATH",
-                   help="normal file(s) when the normals are not in the depth file (same count as --depth)")
-    lens = e.add_mutually_exclusive_group(required=True)
+def _frame_options(e, *, lens_required: bool) -> None:
+    """The options that read a renderer's frame (camera, conversions, channels): shared by
+    `vobscure estimate` and `vobscure compare --gbuffer`."""
+    lens = e.add_mutually_exclusive_group(required=lens_required)
     lens.add_argument("--fov", type=float, metavar="DEG", help="vertical field of view in degrees")
     lens.add_argument("--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"),
                       help="pinhole intrinsics in pixels (principal point from the top-left corner)")
@@ -210,6 +218,24 @@ def _estimate_parser(sub) -> None:
                    help="EXR layer (e.g. 'View Layer.Normal') or X,Y,Z channel names, or NPZ array")
     e.add_argument("--depth-scale", type=float, default=None, metavar="S",
                    help="scene units per stored depth unit (required for PNG depth)")
+
+
+def _estimate_parser(sub) -> None:
+    e = sub.add_parser("estimate", help="estimate the VO of your own frame(s) from depth (and normal) files",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Estimate screen-space Volumetric Obscurance of a renderer's frame: read "
+                                   "its depth (and normals) from EXR, NPY/NPZ, PFM or 16-bit PNG files "
+                                   "(vobscure.io.read_gbuffer), run one estimator and write the visibility "
+                                   "(EXR, PNG, NPY or PFM). A directory or glob of frames runs frame by frame "
+                                   "with the same seed and reports the temporal flicker.",
+                       epilog="example:\n  vobscure estimate --depth frame.exr --fov 39.6 --radius 0.5 "
+                              "--out vo.exr\n  vobscure estimate --depth 'frames/*.exr' --fov 39.6 --radius 0.5 "
+                              "--out vo/")
+    e.add_argument("--depth", required=True, metavar="PATH",
+                   help="depth file (.exr .npy .npz .pfm .png), a directory of them or a glob in quotes")
+    e.add_argument("--normal", default=None, metavar="PATH",
+                   help="normal file(s) when the normals are not in the depth file (same count as --depth)")
+    _frame_options(e, lens_required=True)
     e.add_argument("--method", default="line:9", metavar="NAME[:SAMPLES[:FETCH]]",
                    help="one screen-space configuration from vobscure.methods (default line:9)")
     e.add_argument("--radius", type=float, required=True, help="ball radius in scene units")
@@ -279,12 +305,47 @@ def _estimate_camera(args, size, pose):
     return Camera.from_projection(matrix, size, convention=args.projection_convention, pose=vobscure_pose)
 
 
+def _frame_reader(args):
+    """``read(depth_path, normal_path, camera) -> (GBuffer, camera)`` for the frame options of
+    :func:`_frame_options`: files by :func:`vobscure.io.read_buffers`, the camera made from the
+    first frame's size (later frames must match it), conversions by ``GBuffer.from_arrays``."""
+    from .gbuffer import GBuffer
+    from .io import read_buffers
+
+    if args.fov is None and args.intrinsics is None and args.projection is None:
+        raise ValueError("a frame needs its camera: give --fov, --intrinsics or --projection")
+    pose = _matrix_arg(args.pose, "pose") if args.pose is not None else None
+    channels = args.normal_channels
+    if channels is not None and "," in channels:
+        channels = tuple(c.strip() for c in channels.split(","))
+    convert = {k: v for k, v in (("near", args.near), ("far", args.far), ("normal_space", args.normal_space),
+                                 ("normal_encoding", args.normal_encoding), ("convention", args.convention),
+                                 ("background", args.background)) if v is not None}
+    if args.normal_space == "world" and pose is None and args.intrinsics is None and args.projection is None:
+        raise ValueError("--normal-space world needs the camera's --pose")
+
+    def read(depth_path, normal_path, camera):
+        depth, normal, found = read_buffers(depth_path, normal_path=normal_path, depth_channel=args.depth_channel,
+                                            normal_channels=channels, depth_scale=args.depth_scale)
+        H, W = depth.shape
+        if camera is None:
+            camera = _estimate_camera(args, (W, H), pose)
+        elif camera.size != (W, H):
+            raise ValueError(f"{depth_path} is {W}x{H} pixels but the first frame is "
+                             f"{camera.size[0]}x{camera.size[1]}; every frame must have one size")
+        kwargs = dict(convert)
+        if found.get("normal_encoding") and "normal_encoding" not in kwargs:
+            kwargs["normal_encoding"] = found["normal_encoding"]
+        return GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=args.depth_kind, **kwargs), camera
+
+    return read
+
+
 def _estimate_main(args) -> int:
     from tqdm import tqdm
 
     from . import methods
-    from .gbuffer import GBuffer
-    from .io import read_buffers, write_image
+    from .io import write_image
     from .metrics import flicker
     from .screenspace import bilateral_blur, vo_reference
 
@@ -305,35 +366,17 @@ def _estimate_main(args) -> int:
         raise ValueError(f"--flicker-reference must be >= 0 samples, got {args.flicker_reference}")
     if not (np.isfinite(args.radius) and args.radius > 0):
         raise ValueError(f"--radius must be a finite number > 0, got {args.radius}")
-    pose = _matrix_arg(args.pose, "pose") if args.pose is not None else None
     many = len(depth_paths) > 1
     outs = _estimate_outputs(args.out, depth_paths)
-    channels = args.normal_channels
-    if channels is not None and "," in channels:
-        channels = tuple(c.strip() for c in channels.split(","))
-    convert = {k: v for k, v in (("near", args.near), ("far", args.far), ("normal_space", args.normal_space),
-                                 ("normal_encoding", args.normal_encoding), ("convention", args.convention),
-                                 ("background", args.background)) if v is not None}
-    if args.normal_space == "world" and pose is None and args.intrinsics is None and args.projection is None:
-        raise ValueError("--normal-space world needs the camera's --pose")
+    read_frame = _frame_reader(args)
 
     frames, references, camera, started = [], [], None, time.perf_counter()
     bar = tqdm(total=len(depth_paths), desc="estimate", unit="frame", disable=args.quiet or not many)
     for depth_path, normal_path, out in zip(depth_paths, normal_paths, outs):
-        depth, normal, found = read_buffers(depth_path, normal_path=normal_path, depth_channel=args.depth_channel,
-                                            normal_channels=channels, depth_scale=args.depth_scale)
-        H, W = depth.shape
-        if camera is None:
-            camera = _estimate_camera(args, (W, H), pose)
-        elif camera.size != (W, H):
-            raise ValueError(f"{depth_path} is {W}x{H} pixels but the first frame is "
-                             f"{camera.size[0]}x{camera.size[1]}; every frame must have one size")
+        gb, camera = read_frame(depth_path, normal_path, camera)
+        H, W = gb.valid.shape
         stages = tqdm(total=3 + args.blur, desc=depth_path.name, leave=False,
                       disable=args.quiet or many or H * W < ESTIMATE_PROGRESS_PIXELS)
-        kwargs = dict(convert)
-        if found.get("normal_encoding") and "normal_encoding" not in kwargs:
-            kwargs["normal_encoding"] = found["normal_encoding"]
-        gb = GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=args.depth_kind, **kwargs)
         stages.update()
         v = config.run(gb, radius=args.radius, normal_clamp=args.normal_clamp, thickness=args.thickness,
                        seed=args.seed)

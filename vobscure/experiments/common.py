@@ -42,8 +42,14 @@ RADIUS_FRACTION = 0.1
 
 
 def default_radius(scene) -> float:
-    """:data:`RADIUS_FRACTION` times ``scene.extent``."""
-    return RADIUS_FRACTION * float(scene.extent)
+    """:data:`RADIUS_FRACTION` times ``scene.extent``; for a G-buffer (a user's frame, no scene),
+    times the diagonal of the bounding box of its covered pixels' view-space positions."""
+    if hasattr(scene, "extent"):
+        return RADIUS_FRACTION * float(scene.extent)
+    p = np.asarray(scene.position)[np.asarray(scene.valid)]
+    if p.size == 0:
+        raise ValueError("the G-buffer covers no pixel: give a radius")
+    return RADIUS_FRACTION * float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
 
 
 def machine() -> dict:

@@ -163,7 +163,7 @@ def _row(result, metrics=METRICS) -> dict:
     return row
 
 
-def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=None,
+def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=None, methods=None,
             normal_clamp: bool = False, thickness=None, references=None, repeats: int = 3,
             rays: int = 256, volume_samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
@@ -174,8 +174,14 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
 
     Parameters
     ----------
-    scene : str, path or Scene
-        A built-in scene name, a mesh file, or a :class:`vobscure.scenes.Scene`.
+    scene : str, path, Scene or GBuffer
+        A built-in scene name, a mesh file, a :class:`vobscure.scenes.Scene`, or a user's
+        :class:`~vobscure.GBuffer` (e.g. :func:`vobscure.io.read_gbuffer` of a renderer's
+        frame): then the only reference is the converged screen-space VO (``"screen"``),
+        the camera is the G-buffer's, and the default radius is 0.1 x the diagonal of its
+        covered pixels' view-space bounding box.
+    name : str, optional
+        The name in the outputs for a G-buffer (default ``"gbuffer"``).
     camera : Camera, optional
         Default: the scene's suggested camera at ``size``.
     size : (int, int), optional
@@ -251,14 +257,23 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
     >>> r["method"], r["samples"], r["taps_per_pixel"], r["texels_per_pixel"], r["own_reference"]
     ('line', 5, 5, 5, 'screen')
     """
+    from ..gbuffer import GBuffer
     from ..scenes import resolve
 
-    sc, scene_name = resolve(scene)
+    frame = isinstance(scene, GBuffer)        # a user's frame: no geometry, no ray-cast reference
+    if frame:
+        sc, scene_name = scene, name or "gbuffer"
+        if orbit:
+            raise ValueError("orbit needs a scene to render from other viewpoints; a G-buffer is one view")
+    else:
+        sc, scene_name = resolve(scene)
     vegetation = "canopy_points" in (getattr(sc, "metadata", None) or {})
     if methods is None:
         methods = DEFAULT_METHODS + ("," + VEGETATION_METHODS if vegetation else "")
     configs = parse_methods(methods)
-    if references is None:
+    if references is None and frame:
+        references = ("screen",)
+    elif references is None:
         references = tuple(r for r in DEFAULT_REFERENCES if r != "volumetric" or sc.is_watertight)
         references += ("sky",) if vegetation else ()
     references = tuple(references)
@@ -278,7 +293,9 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
         repeats, rays = 1, min(rays, 64)
         volume_samples, screen_samples = min(volume_samples, 256), min(screen_samples, 512)
         orbit = min(orbit, 4) if orbit else 0
-    if camera is None:
+    if frame:
+        camera = sc.camera
+    elif camera is None:
         size = tuple(size) if size is not None else (QUICK_SIZE if quick else DEFAULT_SIZE)
         camera = sc.camera(size)
     if radii is None:
@@ -310,6 +327,11 @@ def compare(scene="cornell_box", *, camera=None, size=None, radii=None, methods=
         thickness_trials = _thickness_trials(rows, images, all_refs, gb, normal_clamp=normal_clamp,
                                              seed=seed, repeats=repeats)
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
+    if frame:
+        summary["text"].insert(0, "A G-buffer without its scene: the converged screen-space VO is the only "
+                                  "reference possible (nothing can be ray cast), so these errors are the "
+                                  "estimators' sampling errors; what the screen-space model itself misses "
+                                  "(thickness, hidden and off-screen geometry) cannot be measured here.")
 
     provenance = dict(
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),

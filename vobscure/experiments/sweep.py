@@ -75,10 +75,12 @@ ERROR_STATS = ("rmse", "mae", "bias", "max_abs", "psnr", "ssim", "pixels")
 
 def _scene_spec(scene):
     """A scene name or path that every worker can resolve (checked here, built there), or a
-    Scene (for executors in this process only: a Scene is not sent to other processes)."""
+    Scene or a GBuffer (for executors in this process only: they are not sent to other
+    processes)."""
+    from ..gbuffer import GBuffer
     from ..scenes import Scene, check_spec
 
-    return scene if isinstance(scene, Scene) else check_spec(scene, exists=False)
+    return scene if isinstance(scene, (Scene, GBuffer)) else check_spec(scene, exists=False)
 
 
 @dataclass(frozen=True)
@@ -87,10 +89,13 @@ class SweepConfig:
 
     Parameters
     ----------
-    scene : str or Scene
+    scene : str, Scene or GBuffer
         A built-in scene (:func:`vobscure.scenes.names`) or a mesh file (a path that every
         worker can read); a :class:`~vobscure.scenes.Scene` object only with an executor
-        that runs in this process (:class:`InlineExecutor`, a thread pool).
+        that runs in this process (:class:`InlineExecutor`, a thread pool); or a user's
+        :class:`~vobscure.GBuffer` (e.g. from :func:`vobscure.io.read_gbuffer`), also in
+        process only, whose only possible reference is ``"screen"``: without the geometry
+        nothing can be ray cast.
     method : str
         A method of the registry (:func:`vobscure.methods.names`): ``"point"``, ``"line"``,
         ``"area"``, ``"reference"``, ...
@@ -163,8 +168,16 @@ class SweepConfig:
         from ..camera import Camera, check_size
         from ..groundtruth import VO_FALLOFFS
 
+        from ..gbuffer import GBuffer
+
         put = object.__setattr__
         put(self, "scene", _scene_spec(self.scene))
+        if isinstance(self.scene, GBuffer):
+            put(self, "camera", self.scene.camera)
+            refs = (self.references,) if isinstance(self.references, str) else tuple(self.references)
+            if set(refs) - {"screen"}:
+                raise ValueError(f"references {refs} need the scene's geometry; a G-buffer alone has only the "
+                                 f"converged screen-space reference, references=('screen',)")
         config = _methods.Config(_methods.get(self.method).name, self.samples, fetch=self.fetch)
         put(self, "samples", config.samples)
         put(self, "fetch", config.fetch)
@@ -222,14 +235,16 @@ class SweepConfig:
     @property
     def scene_name(self) -> str:
         """The scene's name or path; ``"custom"`` for a Scene object."""
-        return self.scene if isinstance(self.scene, str) else "custom"
+        if isinstance(self.scene, str):
+            return self.scene
+        return "gbuffer" if type(self.scene).__name__ == "GBuffer" else "custom"
 
     @property
     def view_key(self) -> str:
         """The scene and camera (or size) as one string: configurations that share it share a
         G-buffer and references."""
         cam = self.camera.to_dict() if self.camera is not None else {"size": list(self.size)}
-        scene = self.scene if isinstance(self.scene, str) else f"<Scene at {id(self.scene):#x}>"
+        scene = self.scene if isinstance(self.scene, str) else f"<{type(self.scene).__name__} at {id(self.scene):#x}>"
         return json.dumps([scene, cam], sort_keys=True)
 
 
@@ -385,6 +400,8 @@ def view(config: SweepConfig):
     stamp = _stamp(config.scene)
 
     def make_view():
+        if config.scene_name == "gbuffer":
+            return None, config.scene.camera, config.scene
         scene = _MEMO.get(("scene", config.view_key if not isinstance(config.scene, str) else config.scene, stamp),
                           lambda: resolve(config.scene)[0])
         camera = config.camera if config.camera is not None else scene.camera(config.size)
@@ -428,7 +445,7 @@ def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
     from .common import time_calls
 
     scene, camera, gb = view(config)
-    radius = config.radius if config.radius is not None else default_radius(scene)
+    radius = config.radius if config.radius is not None else default_radius(scene if scene is not None else gb)
     made = {name: _reference(name, config, scene, gb, radius, cache) for name in config.references}
     refs = {name: est for name, (est, _) in made.items()}
     mc = config.method_config
