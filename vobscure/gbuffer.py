@@ -533,12 +533,17 @@ def _clip_planes(camera, near, far, depth_kind):
     return near, far
 
 
-def _view_rays(camera) -> np.ndarray:
-    """(H, W, 3) view-space direction of each pixel centre's ray (not normalized)."""
-    if camera.is_perspective:
-        return camera.unproject(camera.pixel_centers(), 1.0)     # (x, y, 1) at unit depth
+def _view_rays(camera, rows: slice = slice(None)) -> np.ndarray:
+    """(h, W, 3) view-space direction of each pixel centre's ray (not normalized), for the
+    image's ``rows``."""
     H, W = camera.shape
-    return np.broadcast_to(np.array([0.0, 0.0, 1.0]), (H, W, 3))
+    i = np.arange(H, dtype=np.float64)[rows] + 0.5
+    if camera.is_perspective:
+        centers = np.empty((len(i), W, 2))
+        centers[..., 0] = np.arange(W, dtype=np.float64)[None, :] + 0.5
+        centers[..., 1] = i[:, None]
+        return camera.unproject(centers, 1.0)                    # (x, y, 1) at unit depth
+    return np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(i), W, 3))
 
 
 def _linearize(raw, kind, near, far, camera, rays):
@@ -666,7 +671,6 @@ def _from_arrays(cls, depth, normal, *, camera, depth_kind, near, far, normal_sp
         near, far = _clip_planes(camera, near, far, depth_kind)
     bg, nonfinite = _background(raw, given, depth_kind, background)
     covered = ~bg
-    rays = _view_rays(camera)
     values = raw[covered]
     if is_ndc:
         lo, hi = _RANGES[depth_kind]
@@ -675,7 +679,8 @@ def _from_arrays(cls, depth, normal, *, camera, depth_kind, near, far, normal_sp
             raise ValueError(f"depth (depth_kind={depth_kind!r}) must lie in [{lo}, {hi}] on covered "
                              f"pixels; {outside} value(s) do not (min {values.min():.6g}, max "
                              f"{values.max():.6g}). Is depth_kind right, or are they background?")
-    z = _linearize(values, depth_kind, near, far, camera, rays[covered])
+    z = _linearize(values, depth_kind, near, far, camera,
+                   _view_rays(camera)[covered] if depth_kind == "distance" else None)
     bad = ~(np.isfinite(z) & (z > 0))
     if bad.any():
         hint = (" OpenGL eye-space z is negative in front of the camera: pass -z." if
@@ -702,22 +707,61 @@ def _from_arrays(cls, depth, normal, *, camera, depth_kind, near, far, normal_sp
 
     # -- normals
     if nrm is None:
-        n_view, undetermined = _derive_normals(camera, linear, covered, rays=rays)
+        n_view, undetermined = _derive_normals(camera, linear, covered)
         counts["derived"] = counts["covered"]
         counts["undetermined"] = undetermined
     else:
-        n_view = _convert_normals(nrm, camera, covered, normal_space=normal_space,
-                                  encoding=normal_encoding, convention=convention,
-                                  view_frame=view_frame)
-        n_view, fixes = _check_normals(n_view, camera, linear, covered, rays, normal_tol,
-                                       repair_normals)
+        n_view, fixes = _normals_in_bands(nrm, camera, linear, covered, dtype, normal_space=normal_space,
+                                          encoding=normal_encoding, convention=convention,
+                                          view_frame=view_frame, tol=normal_tol, repair=repair_normals)
         counts.update(fixes)
     counts.update(depth_kind=depth_kind, normal_space=None if nrm is None else normal_space,
                   normal_encoding=None if nrm is None else normal_encoding, convention=convention)
     H, W = camera.shape
     return cls(camera, depth=linear, normal=n_view, valid=covered,
-               primitive=np.full((H, W), -1, dtype=np.int64), hits=None, dtype=dtype,
+               primitive=np.broadcast_to(np.int64(-1), (H, W)), hits=None, dtype=dtype,
                view_to_world=view_frame, conversion=counts)
+
+
+#: Rows of the normal image converted and checked at once (bounded memory on large frames).
+NORMAL_BAND_ROWS = 64
+
+
+def _normals_in_bands(nrm, camera, depth, covered, dtype, *, normal_space, encoding, convention, view_frame,
+                      tol, repair):
+    """The normal image converted to the library's frame, checked, renormalized and flipped to
+    face the camera, in bands of :data:`NORMAL_BAND_ROWS` rows (float64 work, ``dtype``
+    output), with one warning for the whole image."""
+    H, W = covered.shape
+    out = np.zeros((H, W, 3), dtype=dtype)
+    counts = {"renormalized": 0, "flipped": 0, "repaired": 0}
+    missing_all, worst = np.zeros((H, W), dtype=bool), 0.0
+    for r0 in range(0, H, NORMAL_BAND_ROWS):
+        rows = slice(r0, min(r0 + NORMAL_BAND_ROWS, H))
+        n = _convert_normals(nrm[rows], camera, covered[rows], normal_space=normal_space, encoding=encoding,
+                             convention=convention, view_frame=view_frame)
+        band, c, missing, diff = _check_normals(n, covered[rows], _view_rays(camera, rows), tol)
+        out[rows] = band
+        counts["renormalized"] += c["renormalized"]
+        counts["flipped"] += c["flipped"]
+        missing_all[rows] = missing
+        worst = max(worst, diff)
+    k = int(missing_all.sum())
+    if k and not repair:
+        raise ValueError(f"normal has {k} zero or NaN vector(s) on covered pixels (finite depth); "
+                         "mark those pixels background, or pass repair_normals=True to derive "
+                         "their normals from the depth")
+    if counts["renormalized"]:
+        warnings.warn(f"renormalized {counts['renormalized']} normal(s) of {int(covered.sum())} "
+                      f"covered pixels whose length differed from 1 by more than normal_tol={tol:g} "
+                      f"(largest difference {worst:.3g})", NormalsRenormalizedWarning, stacklevel=4)
+    if k:
+        derived, _ = _derive_normals(camera, depth, covered)
+        out[missing_all] = derived[missing_all]
+        counts["repaired"] = k
+        warnings.warn(f"derived {k} zero or NaN normal(s) of covered pixels from the depth "
+                      "(repair_normals=True)", NormalsRepairedWarning, stacklevel=4)
+    return out, counts
 
 
 def _convert_normals(nrm, camera, covered, *, normal_space, encoding, convention, view_frame):
@@ -748,39 +792,27 @@ def _convert_normals(nrm, camera, covered, *, normal_space, encoding, convention
     return n
 
 
-def _check_normals(n, camera, depth, covered, rays, tol, repair):
-    """Renormalize (warn beyond ``tol``), repair or reject zero/NaN, flip to face the camera."""
-    counts = {"renormalized": 0, "flipped": 0, "repaired": 0}
+def _check_normals(n, covered, rays, tol):
+    """One band: renormalize, flag zero/NaN vectors, flip to face the camera.
+
+    Returns (unit normals, zero where missing or uncovered; counts; the missing mask; the
+    largest length difference beyond ``tol``)."""
+    counts = {"renormalized": 0, "flipped": 0}
     with np.errstate(invalid="ignore", over="ignore"):
         length = np.sqrt(np.einsum("...i,...i->...", n, n))
     missing = covered & ~(np.isfinite(length) & (length > NORMAL_ZERO_TOL))
-    k = int(missing.sum())
-    if k and not repair:
-        raise ValueError(f"normal has {k} zero or NaN vector(s) on covered pixels (finite depth); "
-                         "mark those pixels background, or pass repair_normals=True to derive "
-                         "their normals from the depth")
     ok = covered & ~missing
     off = ok & (np.abs(length - 1.0) > tol)
     counts["renormalized"] = int(off.sum())
-    if counts["renormalized"]:
-        warnings.warn(f"renormalized {counts['renormalized']} normal(s) of {int(covered.sum())} "
-                      f"covered pixels whose length differed from 1 by more than normal_tol={tol:g} "
-                      f"(largest difference {float(np.abs(length[off] - 1.0).max()):.3g})",
-                      NormalsRenormalizedWarning, stacklevel=4)
+    worst = float(np.abs(length[off] - 1.0).max()) if counts["renormalized"] else 0.0
     out = np.zeros_like(n)
     out[ok] = n[ok] / length[ok, None]
-    if k:
-        derived, _ = _derive_normals(camera, depth, covered, rays=rays)
-        out[missing] = derived[missing]
-        counts["repaired"] = k
-        warnings.warn(f"derived {k} zero or NaN normal(s) of covered pixels from the depth "
-                      "(repair_normals=True)", NormalsRepairedWarning, stacklevel=4)
     # face the camera: n . d < 0 for the pixel's view ray d
     away = ok & (np.einsum("...i,...i->...", out, rays) > 0)
     out[away] *= -1.0
     counts["flipped"] = int(away.sum())
     out += 0.0   # no negative zeros
-    return out, counts
+    return out, counts, missing, worst
 
 
 def _derive_normals(camera, depth, covered, *, rays=None):
