@@ -682,7 +682,7 @@ class Camera:
     @property
     def is_centered_square(self) -> bool:
         """True when ``fx == fy`` and the principal point is the image centre (every
-        :meth:`look_at` camera): the screen-space estimators' historical case."""
+        :meth:`look_at` camera)."""
         W, H = self._size
         return self._fx == self._fy and self._cx == W / 2.0 and self._cy == H / 2.0
 
