@@ -136,10 +136,11 @@ def test_sunflower_is_uniform_by_area():
     assert 0 < GOLDEN_ANGLE < np.pi
 
 
-#: Measured RMSE over the crease floor (radius 1, 768 taps, defaults) against the ray-cast
-#: obscurance (1024 cosine rays) with each of groundtruth.OBSCURANCE_FALLOFFS, in
-#: docs/screenspace.md: Alchemy step 0.17, linear 0.29, smooth 0.29; SAO step 0.20,
-#: linear 0.24, smooth 0.23. Neither estimates any of them; "step" (AO within r) is closest.
+#: Measured RMSE over the 1353 interior crease-floor pixels (radius 1, 1024 taps, defaults)
+#: against the ray-cast obscurance (1024 cosine rays, stderr 3.5e-3) with each of
+#: groundtruth.OBSCURANCE_FALLOFFS (docs/screenspace.md): Alchemy step 0.141, linear 0.260,
+#: smooth 0.259; SAO step 0.187, linear 0.227, smooth 0.219. Neither estimates any of them
+#: (the margins, > 0.03, are 10x the reference noise); "step" (AO within r) is the closest.
 CLOSEST_FALLOFF = "step"
 
 
