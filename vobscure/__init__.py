@@ -15,7 +15,7 @@ from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flic
 from .raytrace import Tracer
 from .scenes import Scene
 from .screenspace import bilateral_blur, combine_radii, vo_area, vo_line, vo_point, vo_reference
-from . import methods, patterns, trees
+from . import methods, patterns, shading, trees
 
 
 def __getattr__(name):
@@ -57,6 +57,7 @@ __all__ = [
     "obscurance",
     "render_gbuffer",
     "scenes",
+    "shading",
     "volumetric_obscurance",
     "patterns",
     "trees",
