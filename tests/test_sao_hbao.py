@@ -1,4 +1,5 @@
-"""Alchemy AO and SAO (McGuire et al. 2011, 2012): planes, the orthographic crease, extremes."""
+"""Alchemy AO, SAO (McGuire et al. 2011, 2012) and HBAO (Bavoil et al. 2008): planes, the
+orthographic crease, extremes."""
 
 from __future__ import annotations
 
@@ -7,12 +8,13 @@ import pytest
 
 import vobscure as vo
 from vobscure.gbuffer import GBuffer
-from vobscure.screenspace.sao import GOLDEN_ANGLE, alchemy, sao
+from vobscure.screenspace.hbao import hbao, hbao_taps
+from vobscure.screenspace.sao import GOLDEN_ANGLE, alchemy, alchemy_taps, sao, sao_taps
 
 #: Planes with the default bias beta: every tap has v . n below the bias, so exactly 1.
 #: Without the bias (beta = 0) float32 depth noise gives v . n of either sign; measured
 #: largest 1 - A over the slab views below and the intrinsics camera: 1.7e-5 (Alchemy),
-#: 3.0e-5 (SAO); 1e-4 is 3x the larger.
+#: 3.0e-5 (SAO), 1.3e-5 (HBAO, angle_bias = 0); 1e-4 is 3x the largest.
 PLANE_NOISE_TOL = 1e-4
 #: The estimators against their own converged value on the orthographic crease (the disk
 #: (Alchemy) or spiral (SAO) integral of the same summand, computed here by ray-plane
@@ -26,12 +28,13 @@ LIMIT_TOL = 1e-2
 #: points come from float32 depths (relative error u = 6e-8) in v . n / v . v, where |v| can
 #: be a few pixels while z is large, amplifying u by z / |v| ~ 100. Measured max on the
 #: oblique crease: float32 1.1e-6 (Alchemy), 2.4e-6 (SAO); scales 1e-3 and 1e3 2.0e-6 and
-#: 4.7e-6. 2e-5 is 4x the largest.
+#: 4.7e-6; HBAO 1.0e-6 and 1.4e-6. 2e-5 is 4x the largest.
 FLOAT32_TOL = 2e-5
 
 R_CREASE = 1.0
 SIZE = 128
-ESTIMATORS = [alchemy, sao]
+ESTIMATORS = [alchemy, sao, hbao]
+NO_BIAS = {alchemy: dict(beta=0.0), sao: dict(beta=0.0), hbao: dict(angle_bias=0.0)}
 
 
 @pytest.fixture(scope="module")
@@ -58,14 +61,15 @@ def crease_view():
 @pytest.mark.parametrize("view", [dict(eye=(1, 2, 1.5), fov_y=40.0), dict(eye=(3, 0.6, 0.4), fov_y=30.0),
                                   dict(eye=(1, 2, 1.5), ortho_height=2.0)], ids=["oblique", "grazing", "ortho"])
 def test_planes_open_by_the_bias(big_slab, fn, view):
-    """The bias term (Alchemy's z_C beta, SAO's beta) makes a plane read exactly 1."""
+    """The bias term (Alchemy's z_C beta, SAO's beta, HBAO's angle bias) makes a plane read
+    exactly 1."""
     kw = dict(view)
     cam = vo.Camera.look_at(kw.pop("eye"), (0, 0, 0), size=(64, 48), **kw)
     gb = vo.render_gbuffer(big_slab, cam)
     for radius in (0.02, 0.3):
         v = fn(gb, radius=radius)
         assert np.all(v[gb.valid] == 1.0)
-        v0 = fn(gb, radius=radius, beta=0.0)
+        v0 = fn(gb, radius=radius, **NO_BIAS[fn])
         assert np.min(v0[gb.valid]) > 1.0 - PLANE_NOISE_TOL
 
 
@@ -136,6 +140,14 @@ def test_sunflower_is_uniform_by_area():
     assert 0 < GOLDEN_ANGLE < np.pi
 
 
+#: HBAO on the orthographic crease, 32 directions x 16 steps, angle_bias = 0, against what it
+#: estimates: unattenuated, the uniformly weighted AO within R, (1 + c) / 2; attenuated by
+#: W = 1 - r^2 / R^2, the uniformly weighted obscurance with rho(t) = t^2 (ray-cast, 1024
+#: rays, noise 1.5e-3 RMS). Measured RMSE over 451 floor pixels 0.0080 and 0.0083 (0.0042
+#: and 0.0041 at 64 x 32: the march's discretization, the horizon between taps missed, a
+#: positive bias halving with N_s). 0.02 is 2.4x; the step falloff instead of t^2 gives 0.10.
+HBAO_TOL = 0.02
+
 #: Measured RMSE over the 1353 interior crease-floor pixels (radius 1, 1024 taps, defaults)
 #: against the ray-cast obscurance (1024 cosine rays, stderr 3.5e-3) with each of
 #: groundtruth.OBSCURANCE_FALLOFFS (docs/screenspace.md): Alchemy step 0.141, linear 0.260,
@@ -147,7 +159,7 @@ CLOSEST_FALLOFF = "step"
 def test_closest_obscurance(crease_view):
     scene, gb, floor, _, _ = crease_view
     pts, nrm = gb.world_position[floor][::7], gb.world_normal[floor][::7]
-    for fn in ESTIMATORS:
+    for fn in (alchemy, sao):
         est = fn(gb, radius=R_CREASE, samples=256)[floor][::7]
         rmse = {}
         for falloff in vo.groundtruth.OBSCURANCE_FALLOFFS:
@@ -217,22 +229,52 @@ def test_fx_fy_cx_cy_honoured():
     gb = vo.render_gbuffer(scene, cam)
     for fn in ESTIMATORS:
         assert np.all(fn(gb, radius=0.3)[gb.valid] == 1.0)
-        assert np.min(fn(gb, radius=0.3, beta=0.0)[gb.valid]) > 1.0 - PLANE_NOISE_TOL
+        assert np.min(fn(gb, radius=0.3, **NO_BIAS[fn])[gb.valid]) > 1.0 - PLANE_NOISE_TOL
 
 
 @pytest.mark.parametrize("fn", ESTIMATORS)
 def test_bad_arguments(fn, crease_view):
     _, gb, _, _, _ = crease_view
     cases = [(dict(radius=0), "radius"), (dict(radius=-1), "radius"), (dict(radius=np.nan), "radius"),
-             (dict(radius=1, samples=0), "samples"), (dict(radius=1, samples=2.5), "samples"),
-             (dict(radius=1, beta=-1), "beta"), (dict(radius=1, sigma=-1), "sigma"),
-             (dict(radius=1, k=0), "k"), (dict(radius=1, epsilon=0), "epsilon"),
              (dict(radius=1, offscreen="wrap"), "offscreen"), (dict(radius=1, noise_size=0), "noise_size"),
              (dict(radius=1, seed="x"), "seed")]
+    if fn is not hbao:
+        cases += [(dict(radius=1, samples=0), "samples"), (dict(radius=1, samples=2.5), "samples"),
+                  (dict(radius=1, beta=-1), "beta"), (dict(radius=1, sigma=-1), "sigma"),
+                  (dict(radius=1, k=0), "k"), (dict(radius=1, epsilon=0), "epsilon")]
     if fn is sao:
         cases.append((dict(radius=1, turns=0), "turns"))
     for kw, name in cases:
         with pytest.raises(ValueError, match=name):
             fn(gb, **kw)
+    if fn is hbao:
+        for kw, name in ((dict(directions=0), "directions"), (dict(steps=1.5), "steps"),
+                         (dict(angle_bias=-0.1), "angle_bias"), (dict(angle_bias=np.pi / 2), "angle_bias")):
+            with pytest.raises(ValueError, match=name):
+                fn(gb, radius=1, **kw)
     with pytest.raises(ValueError, match="gbuffer"):
         fn(gb.depth, radius=1)
+
+
+def test_hbao_converges_on_the_crease(crease_view):
+    """Unattenuated, HBAO's horizon integral is the uniformly weighted AO within R, exact on
+    the orthographic crease as directions and steps grow; attenuated, the uniformly weighted
+    obscurance with rho(t) = t^2 (a callable falloff of vobscure.obscurance)."""
+    scene, gb, floor, _, _ = crease_view
+    floor = floor & (np.arange(floor.size).reshape(floor.shape) % 3 == 0)
+    c = gb.world_position[floor][:, 0] / R_CREASE
+    rmse = []
+    for nd, ns in ((4, 2), (8, 4), (32, 16)):
+        u = hbao(gb, radius=R_CREASE, directions=nd, steps=ns, angle_bias=0.0, attenuation=False)[floor]
+        rmse.append(np.sqrt(np.mean((u - (1 + c) / 2) ** 2)))
+    assert rmse[2] < rmse[1] < rmse[0] and rmse[2] < HBAO_TOL, rmse
+    ref = vo.obscurance(scene, gb.world_position[floor], gb.world_normal[floor], radius=R_CREASE,
+                        falloff=lambda t: t * t, weighting="uniform", rays=1024, seed=1).value
+    v = hbao(gb, radius=R_CREASE, directions=32, steps=16, angle_bias=0.0)[floor]
+    assert np.sqrt(np.mean((v - ref) ** 2)) < HBAO_TOL
+
+
+def test_taps():
+    assert alchemy_taps(12) == 12 and sao_taps(9) == 9 and hbao_taps(8, 4) == 32
+    with pytest.raises(ValueError, match="directions"):
+        hbao_taps(0, 4)

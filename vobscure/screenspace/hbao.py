@@ -1,0 +1,174 @@
+"""Horizon-Based Ambient Occlusion (Bavoil, Sainz & Dimitrov 2008), image space.
+
+Per pixel, ``directions`` screen-space directions (rotated per pixel); along each, ``steps``
+taps march out to the projected radius, tracking the horizon: the highest elevation, above
+the view plane, of a tap within distance R. Occlusion per direction is the rise of sin(h)
+above sin(t), t the tangent plane's elevation in that direction, each rise weighted by the
+attenuation W(r) = 1 - r^2 / R^2 of the tap that made it. See ``docs/screenspace.md``,
+"SAO, Alchemy and HBAO".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import check_choice, check_int, check_positive
+from . import _common as C
+
+__all__ = ["hbao", "hbao_taps"]
+
+
+def hbao_taps(directions: int, steps: int) -> int:
+    """Depth-buffer taps per pixel of :func:`hbao`: directions x steps."""
+    return check_int(directions, "directions") * check_int(steps, "steps")
+
+
+def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_bias: float = np.pi / 18,
+         attenuation: bool = True, randomize: bool = True, seed=0, offscreen: str = "clamp",
+         noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+    """Image-space horizon-based ambient occlusion (Bavoil, Sainz & Dimitrov 2008).
+
+    For each direction theta (screen space; view-space (cos theta, sin theta, 0)) the tangent
+    elevation t(theta) comes from the normal: T = (cos theta, sin theta, T_z) with n . T = 0,
+    sin t = -T_z / |T| (elevation towards the camera, above the view plane), raised by
+    ``angle_bias``. Tap i of the march, at screen distance (i + j) R' / N_s (j a per-pixel
+    jitter in (0, 1], 1 without ``randomize``; R' the projected radius), gives the view-space
+    point S_i, D_i = S_i - P, r_i = |D_i| and sin h(S_i) = -D_z / r_i. Taps with r_i < R
+    that raise the horizon add W(r_i) (sin h(S_i) - sin h_prev); then
+
+        AO = (1 / N_d) sum_theta sum_i W(r_i) (sin h(S_i) - sin h(S_{i-1})),   V = 1 - AO.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        Depth (H, W) and view-space normals (H, W, 3), perspective (any pinhole) or
+        orthographic camera.
+    radius : float
+        R, the world-space radius of influence (> 0).
+    directions : int
+        N_d, directions per pixel (>= 1, default 8).
+    steps : int
+        N_s, taps per direction (>= 1, default 4).
+    angle_bias : float
+        Added to the tangent angle t, in radians (in [0, pi/2), default pi/18 = 10 degrees,
+        vobscure's choice): horizons less than this above the tangent plane do not occlude,
+        so planes (and their depth-buffer noise) read fully open.
+    attenuation : bool
+        Weight each horizon rise by W(r) = 1 - r^2 / R^2 (default True, the paper's
+        attenuation); False gives the unattenuated horizon integral, the uniformly weighted
+        AO within R.
+    randomize : bool
+        A random rotation of the directions and a random jitter of the march per pixel, from a
+        tiled ``noise_size`` x ``noise_size`` texture drawn from ``seed`` (default True).
+    seed : int, numpy.random.Generator or None
+        Seed of the texture, converted once (default 0).
+    offscreen : {"clamp", "open"}
+        A tap off the image moves to the nearest border pixel (``"clamp"``) or ends nothing
+        and counts as no occluder (``"open"``).
+    noise_size : int
+        Edge of the texture in pixels (>= 1).
+
+    Returns
+    -------
+    (H, W) ndarray
+        Visibility in [0, 1], NaN on background; float32 for a float32 G-buffer.
+        Depth-buffer taps per pixel: ``hbao_taps(directions, steps)``.
+
+    Raises
+    ------
+    ValueError
+        If an argument is invalid (the message names it).
+
+    Notes
+    -----
+    Taps are snapped to pixel centres and S_i is that pixel's point (nearest fetch, as in
+    :func:`vobscure.screenspace.sao.alchemy`); taps snapping onto the pixel itself are
+    skipped. The paper's per-sample tangent refinement and its blur are not implemented.
+
+    References
+    ----------
+    Bavoil, Sainz & Dimitrov, "Image-Space Horizon-Based Ambient Occlusion", SIGGRAPH 2008
+    talk (and ShaderX7, Sec. 6.2): AO = 1 - 1/(2 pi) int (sin h - sin t) W dtheta, the
+    per-sample attenuation, the angle bias (equation numbers not verified, see
+    ``docs/screenspace.md``).
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> from vobscure.screenspace.hbao import hbao
+    >>> cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(8, 8), fov_y=40)
+    >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+    >>> float(hbao(gb, radius=0.3)[4, 4])
+    1.0
+    """
+    gb = C.as_gbuffer(gbuffer)
+    radius = check_positive(radius, "radius")
+    N_d = check_int(directions, "directions")
+    N_s = check_int(steps, "steps")
+    angle_bias = check_positive(angle_bias, "angle_bias", allow_zero=True)
+    if angle_bias >= np.pi / 2:
+        raise ValueError(f"angle_bias must be in [0, pi/2) radians, got {angle_bias!r}")
+    check_choice(offscreen, "offscreen", C.OFFSCREEN)
+    check_int(noise_size, "noise_size")
+    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    R2 = radius * radius
+    H, W = gb.depth.shape
+
+    def kernel(px: C.Pixels) -> np.ndarray:
+        k = len(px.index)
+        v = C.noise_at(px, texture)
+        if v is None:
+            phi, jitter = np.zeros(k), np.ones(k)
+        else:
+            phi = np.arctan2(v[:, 1], v[:, 0])
+            jitter = 1.0 - 0.5 * (v[:, 2] + 1.0)           # in [0, 1]
+            jitter = np.where(jitter > 0, jitter, 1.0)      # (0, 1]
+        n = px.n
+        p = px.p
+        ao = np.zeros(k)
+        nz = np.minimum(n[:, 2], -1e-12)   # facing the camera; grazing: a vertical tangent
+        for d in range(N_d):
+            theta = 2.0 * np.pi * d / N_d + phi
+            ct, st = np.cos(theta), np.sin(theta)
+            # the running maximum of sin h(S_i) - sin t'(S_i), starting at 0: the horizon's
+            # rise above the biased tangent t' = t + angle_bias
+            e_prev = np.zeros(k)
+            for i in range(N_s):
+                rho = (i + jitter) / N_s
+                # screen step: (R'_x cos theta, -R'_y sin theta) pixels (rows go down)
+                x = np.floor(px.center[:, 0] + px.radius_px_x * rho * ct) + 0.5
+                y = np.floor(px.center[:, 1] - px.radius_px * rho * st) + 0.5
+                if offscreen == "clamp":
+                    x = np.clip(x, 0.5, W - 0.5)
+                    y = np.clip(y, 0.5, H - 0.5)
+                depth = C.fetch_depth(px.depth, x, y, offscreen=offscreen)
+                ok = np.isfinite(depth) & ((x != px.center[:, 0]) | (y != px.center[:, 1]))
+                depth = np.where(ok, depth, px.z)
+                # the tap's view-space point S (Camera.project inverted), D = S - P
+                sx, sy = (x - px.cx) / px.fx, (px.cy - y) / px.fy
+                if px.perspective:
+                    sx, sy = sx * depth, sy * depth
+                Dx, Dy, Dz = sx - p[:, 0], sy - p[:, 1], depth - px.z
+                r2 = Dx * Dx + Dy * Dy + Dz * Dz
+                ok &= (r2 < R2) & (r2 > 0)
+                # HBAO 2008: sin h(S_i) = -D_z / |D| (elevation towards the camera)
+                sin_h = -Dz / np.sqrt(np.where(ok, r2, 1.0))
+                # the tangent T = (u_x, u_y, T_z), n . T = 0, in the tap's own azimuth u (the
+                # snapped tap's, or perspective's, view-space direction; theta where D_xy = 0)
+                D_xy = np.sqrt(Dx * Dx + Dy * Dy)
+                flat = D_xy > 0
+                ux = np.where(flat, Dx / np.where(flat, D_xy, 1.0), ct)
+                uy = np.where(flat, Dy / np.where(flat, D_xy, 1.0), st)
+                T_z = -(n[:, 0] * ux + n[:, 1] * uy) / nz
+                # HBAO 2008: t = the tangent angle above the view plane, plus the angle bias
+                t = np.minimum(np.arctan(-T_z) + angle_bias, np.pi / 2)
+                e = sin_h - np.sin(t)
+                rise = ok & (e > e_prev)
+                # HBAO 2008: W(r) = 1 - r^2 / R^2 times the horizon's rise sin h(S_i) - sin h(S_{i-1})
+                w = (1.0 - r2 / R2) if attenuation else 1.0
+                ao += np.where(rise, w * (e - e_prev), 0.0)
+                e_prev = np.where(rise, e, e_prev)
+        # HBAO 2008: AO = 1/(2 pi) int (sin h - sin t) W dtheta ~ (1 / N_d) sum_theta
+        return np.clip(1.0 - ao / N_d, 0.0, 1.0)
+
+    return C.run_chunks(gb, radius, kernel, C.out_dtype(gb))
