@@ -50,8 +50,9 @@ def _tap(px: C.Pixels, ox: np.ndarray, oy: np.ndarray, offscreen: str):
 
     The tap moves to the centre of the pixel it falls in (off the image: to the nearest
     border pixel with ``offscreen="clamp"``), and Q is that pixel's view-space point (its
-    depth on its own view ray), so that Q is a point of the depth buffer's surface. Returns (vx, vy, vz, ok), ok False where the tap reads background (or an
-    off-screen tap with ``offscreen="open"``): no occluder there.
+    depth on its own view ray), so that Q is a point of the depth buffer's surface.
+    Returns (vx, vy, vz, ok), ok False where the tap reads background (or an off-screen tap
+    with ``offscreen="open"``): no occluder there.
     """
     x, y, _ = C.disk_pixels(px, np.column_stack([ox, oy]), snap=True)
     if offscreen == "clamp":
