@@ -9,7 +9,7 @@ import pytest
 
 import vobscure as vo
 from vobscure.gbuffer import GBuffer
-from vobscure.screenspace.gtao import PRESETS, gtao
+from vobscure.screenspace.gtao import PRESETS, gtao, gtao_bent_normals
 
 #: Planes at 9 slices (not grazing): the slice integral |n_p| (cos g + g sin g) is exact only
 #: on average over slices; the midpoint rule over 9 slices leaves at most 1.4e-6 (measured,
@@ -27,6 +27,13 @@ CREASE_TOL = 1.2e-2
 #: Perspective oblique crease, 16 x 16 against ground_truth("ao", 1024 rays, its own noise
 #: 1.6e-3 RMS): measured RMSE 1.8e-2 (3 x 3: 3.9e-2).
 PERSPECTIVE_TOL = 2.5e-2
+#: Bent normals on a plane, degrees from the normal (interior pixels), 2 slices or more:
+#: measured max 1.2e-6 degrees (3 and 9 slices).
+BENT_PLANE_TOL_DEG = 1e-2
+#: Bent normals on the orthographic crease against the closed form of tests/test_shading.py
+#: (the wall blocks omega_x < -c), 16 x 16 without randomization: measured RMS angle 0.88
+#: degrees (3 x 3: 4.5, 32 x 32: 0.61).
+BENT_CREASE_TOL_DEG = 1.2
 #: float32 against float64 G-buffer, per pixel: the inputs round at 6e-8 relative (computed
 #: in float64 after that). Measured max 9e-7 (orthographic crease), 4e-7 (perspective);
 #: acos near 1 amplifies a rounding of the horizon cosine, hence 10x the measured.
@@ -229,3 +236,42 @@ def test_bad_arguments(crease_view):
 
 def test_presets_are_xegtao():
     assert PRESETS == {"low": (1, 2), "medium": (2, 2), "high": (3, 3), "ultra": (9, 3)}
+
+
+def _angle_deg(a, b):
+    return np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1.0, 1.0)))
+
+
+@pytest.mark.parametrize("view", ["persp-oblique", "ortho-oblique", "persp-grazing"])
+def test_bent_normals_on_planes_are_the_normal(big_slab, view):
+    kw = dict(VIEWS[view][0])
+    gb = vo.render_gbuffer(big_slab, vo.Camera.look_at(kw.pop("eye"), (0, 0, 0), size=(64, 48), **kw))
+    inside = interior(gb, 0.3)
+    n = np.where(gb.valid[..., None], gb.normal, 1.0)
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    for slices in (2, 3, 9):       # one slice: the bent normal lies in its plane
+        b = gtao_bent_normals(gb, radius=0.3, slices=slices, seed=1)
+        assert np.all(np.isnan(b[~gb.valid]))
+        np.testing.assert_allclose(np.linalg.norm(b[gb.valid], axis=-1), 1.0, atol=1e-12)
+        assert np.max(_angle_deg(b, n)[inside]) < BENT_PLANE_TOL_DEG, slices
+
+
+def test_bent_normals_converge_on_the_crease(crease_view):
+    gb, floor, c = crease_view
+    # tests/test_shading.py: the integral of omega cos theta over the open directions
+    exact = np.stack([2 / 3 * (1 - c * c) ** 1.5, np.pi / 3 + np.pi * c / 2 - np.pi * c ** 3 / 6, 0 * c], axis=-1)
+    exact /= np.linalg.norm(exact, axis=-1, keepdims=True)
+    rms = []
+    for n in (3, 16):
+        b = gtao_bent_normals(gb, radius=1.0, slices=n, steps=n, randomize=False)
+        world = b[floor] @ gb.camera.rotation          # view -> world: rotation.T @ b
+        rms.append(np.sqrt(np.mean(_angle_deg(world, exact) ** 2)))
+    assert rms[1] < rms[0] and rms[1] < BENT_CREASE_TOL_DEG, rms
+    # float32 in, float32 out; the same seed, the same image
+    b32 = gtao_bent_normals(gb.astype(np.float32), radius=0.5, seed=3)
+    assert b32.dtype == np.float32 and b32.shape == gb.shape + (3,)
+    assert b32.tobytes() == gtao_bent_normals(gb.astype(np.float32), radius=0.5, seed=3).tobytes()
+    with pytest.raises(ValueError, match="slices"):
+        gtao_bent_normals(gb, radius=0.5, slices=0)
+    with pytest.raises(ValueError, match="radius"):
+        gtao_bent_normals(gb, radius=-1.0)

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _common as C
 
-__all__ = ["gtao", "PRESETS"]
+__all__ = ["gtao", "gtao_bent_normals", "PRESETS"]
 
 #: XeGTAO's quality presets: name -> (slices, steps per side). Taps per pixel: 2 x slices x steps.
 PRESETS = {"low": (1, 2), "medium": (2, 2), "high": (3, 3), "ultra": (9, 3)}
@@ -156,22 +156,83 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     """
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
-    slices = C.check_int(slices, "slices")
-    steps = C.check_int(steps, "steps")
-    falloff_range = _fraction(falloff_range, "falloff_range")
-    thin_occluder = C.check_positive(thin_occluder, "thin_occluder", allow_zero=True)
-    power = C.check_positive(power, "power")
-    normal_fudge = _fraction(normal_fudge, "normal_fudge")
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise ValueError(f"randomize must be True or False, got {randomize!r}")
-    C.check_common(fetch=fetch, offscreen=offscreen, noise_size=noise_size)
+    options = _check(slices=slices, steps=steps, falloff_range=falloff_range, thin_occluder=thin_occluder,
+                     power=power, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
+                     offscreen=offscreen, noise_size=noise_size)
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
     texture = C.noise_texture(noise_size, seed, 3, randomize)
-    kernel = partial(_gtao_kernel, radius=radius, slices=slices, steps=steps, falloff_range=falloff_range,
-                     thin_occluder=thin_occluder, power=power, normal_fudge=normal_fudge,
-                     fetch=fetch, offscreen=offscreen, texture=texture)
+    kernel = partial(_gtao_kernel, radius=radius, texture=texture, **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
+
+
+def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3,
+                      falloff_range: float = 0.0, thin_occluder: float = 0.0, normal_fudge: float = 0.0,
+                      randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
+                      noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+    """View-space bent normals from the GTAO horizons (Jimenez et al. 2016, Sec. 5).
+
+    The same horizon search as :func:`gtao` (same arguments and defaults, same seed -> same
+    horizons); each slice adds |n_p| times the integral of omega cos(theta - gamma) over its
+    visible arc between the horizons, in closed form along the slice direction t and the view
+    vector v (XeGTAO's ``t0``, ``t1``); the sum is normalized. This is the cosine-weighted mean
+    unoccluded direction within ``radius``.
+
+    Parameters
+    ----------
+    gbuffer, radius, slices, steps, falloff_range, thin_occluder, normal_fudge, randomize, seed, fetch, offscreen, noise_size
+        As in :func:`gtao` (``power`` does not apply to a direction).
+
+    Returns
+    -------
+    (H, W, 3) ndarray
+        Unit bent normals in view space (facing the camera like the G-buffer's normals), NaN on
+        background; float32 for a float32 G-buffer, float64 otherwise.
+
+    References
+    ----------
+    Jimenez, Wu, Pesce & Jarabo 2016, Sec. 5 ("Bent normals") and Algorithm 2; XeGTAO,
+    ``XeGTAO.hlsli`` (the closed forms t0, t1).
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> from vobscure.screenspace.gtao import gtao_bent_normals
+    >>> cam = vo.Camera.look_at((0, 3, 0), (0, 0, 0), up=(0, 0, -1), size=(8, 8), ortho_height=2.0)
+    >>> gb = vo.render_gbuffer(vo.scenes.slab(size=50.0), cam)
+    >>> [round(float(c), 6) + 0.0 for c in gtao_bent_normals(gb, radius=0.2)[4, 4]]
+    [0.0, 0.0, -1.0]
+    """
+    C.as_gbuffer(gbuffer)
+    radius = C.check_positive(radius, "radius")
+    options = _check(slices=slices, steps=steps, falloff_range=falloff_range, thin_occluder=thin_occluder,
+                     power=1.0, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
+                     offscreen=offscreen, noise_size=noise_size)
+    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    gb, depth64, index = C.frame(gbuffer, radius)
+    H, W = gb.depth.shape
+    out = np.full((H * W, 3), np.nan, dtype=C.out_dtype(gbuffer))
+    for a in range(0, len(index), C.CHUNK_PIXELS):
+        px = C.prepare(gb, radius, index=index[a:a + C.CHUNK_PIXELS], depth64=depth64)
+        b = _gtao_kernel(px, radius=radius, texture=texture, bent=True, **options)
+        length = np.linalg.norm(b, axis=1, keepdims=True)
+        # no open direction at all (never on a valid pixel: the arc at the normal stays open)
+        out[px.index] = np.where(length > 0, b / np.where(length > 0, length, 1.0), px.n)
+    return out.reshape(H, W, 3)
+
+
+def _check(*, slices, steps, falloff_range, thin_occluder, power, normal_fudge, randomize, fetch, offscreen,
+           noise_size):
+    """Validate the arguments shared by :func:`gtao` and :func:`gtao_bent_normals`."""
+    options = dict(slices=C.check_int(slices, "slices"), steps=C.check_int(steps, "steps"),
+                   falloff_range=_fraction(falloff_range, "falloff_range"),
+                   thin_occluder=C.check_positive(thin_occluder, "thin_occluder", allow_zero=True),
+                   power=C.check_positive(power, "power"),
+                   normal_fudge=_fraction(normal_fudge, "normal_fudge"), fetch=fetch, offscreen=offscreen)
+    if not isinstance(randomize, (bool, np.bool_)):
+        raise ValueError(f"randomize must be True or False, got {randomize!r}")
+    C.check_common(fetch=fetch, offscreen=offscreen, noise_size=noise_size)
+    return options
 
 
 def _fraction(value, name):
@@ -182,8 +243,10 @@ def _fraction(value, name):
 
 
 def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, power, normal_fudge, fetch,
-                 offscreen, texture):
-    """GTAO of one chunk of pixels (see :func:`gtao`): loops over slices and steps only."""
+                 offscreen, texture, bent=False):
+    """GTAO of one chunk of pixels (see :func:`gtao`): loops over slices and steps only.
+
+    Returns the (k,) visibility, or with ``bent`` the (k, 3) unnormalized bent normal."""
     k = len(px.index)
     p = px.p
     n = px.n
@@ -210,6 +273,7 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
         u_step = np.clip(0.5 * (noise[:, 2] + 1.0), 0.0, 1.0 - 1e-12)
     r_x, r_y = px.radius_px_x, px.radius_px
     visibility = np.zeros(k)
+    bent_normal = np.zeros((k, 3)) if bent else None
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # Algorithm 1: phi = pi (slice + noise) / slices; the slice direction t is
@@ -285,6 +349,19 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
             # Sec. 4, Algorithm 1 line 27: |n_p| (a(h_1) + a(h_2))
             visibility += pn_len * (_inner_integral(h1, gamma, sin_g, cos_g)
                                     + _inner_integral(h2, gamma, sin_g, cos_g))
+            if bent:
+                # Jimenez et al. 2016, Sec. 5 (Algorithm 2), in XeGTAO's form: the integral
+                # of omega cos(theta - gamma) |sin theta| over the visible arc, along t and v
+                t_0 = (6.0 * np.sin(h1 - gamma) - np.sin(3.0 * h1 - gamma) + 6.0 * np.sin(h2 - gamma)
+                       - np.sin(3.0 * h2 - gamma) + 16.0 * sin_g
+                       - 3.0 * (np.sin(h1 + gamma) + np.sin(h2 + gamma))) / 12.0
+                t_1 = (-np.cos(3.0 * h1 - gamma) - np.cos(3.0 * h2 - gamma) + 8.0 * cos_g
+                       - 3.0 * (np.cos(h1 + gamma) + np.cos(h2 + gamma))) / 12.0
+                bent_normal[:, 0] += pn_len * (t_0 * tx + t_1 * vx)
+                bent_normal[:, 1] += pn_len * (t_0 * ty + t_1 * vy)
+                bent_normal[:, 2] += pn_len * (t_0 * tz + t_1 * vz)
+    if bent:
+        return bent_normal
     visibility /= slices
     np.clip(visibility, 0.0, 1.0, out=visibility)
     if power != 1.0:
