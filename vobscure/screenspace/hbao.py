@@ -30,8 +30,8 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
 
     For each direction theta (screen space; view-space (cos theta, sin theta, 0)) the tangent
     elevation t(theta) comes from the normal: T = (cos theta, sin theta, T_z) with n . T = 0,
-    sin t = -T_z / |T| (elevation towards the camera, above the view plane), raised by
-    ``angle_bias``. Tap i of the march, at screen distance (i + j) R' / N_s (j a per-pixel
+    t = atan(-T_z) (elevation towards the camera, above the view plane), raised by
+    ``angle_bias`` (evaluated in each tap's own azimuth, see Notes). Tap i of the march, at screen distance (i + j) R' / N_s (j a per-pixel
     jitter in (0, 1], 1 without ``randomize``; R' the projected radius), gives the view-space
     point S_i, D_i = S_i - P, r_i = |D_i| and sin h(S_i) = -D_z / r_i. Taps with r_i < R
     that raise the horizon add W(r_i) (sin h(S_i) - sin h_prev); then
@@ -83,7 +83,13 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
     -----
     Taps are snapped to pixel centres and S_i is that pixel's point (nearest fetch, as in
     :func:`vobscure.screenspace.sao.alchemy`); taps snapping onto the pixel itself are
-    skipped. The paper's per-sample tangent refinement and its blur are not implemented.
+    skipped. Departure: each tap's rise is measured against the tangent elevation in the
+    tap's own view-space azimuth (D_xy / |D_xy|), not theta's: a snapped (or, under
+    perspective, any) tap lies slightly off the direction's line, and on a steep plane
+    sin t changes fast with azimuth, so the paper's form makes planes read occluded (0.82 at
+    R = 0.3 in an oblique view). The rises accumulated are those of the running maximum of
+    sin h(S_i) - sin t'(S_i), t' = t + ``angle_bias``; on the direction's line this is the
+    paper's sin h - sin t. The paper's blur is not implemented.
 
     References
     ----------
