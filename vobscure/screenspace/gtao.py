@@ -170,7 +170,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
                       falloff_range: float = 0.0, thin_occluder: float = 0.0, normal_fudge: float = 0.0,
                       randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
                       noise_size: int = C.NOISE_SIZE) -> np.ndarray:
-    """View-space bent normals from the GTAO horizons (Jimenez et al. 2016, Sec. 5).
+    """View-space bent normals from the GTAO horizons (Jimenez et al. 2016).
 
     The same horizon search as :func:`gtao` (same arguments and defaults, same seed -> same
     horizons); each slice adds |n_p| times the integral of omega cos(theta - gamma) over its
@@ -191,7 +191,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
     References
     ----------
-    Jimenez, Wu, Pesce & Jarabo 2016, Sec. 5 ("Bent normals") and Algorithm 2; XeGTAO,
+    Jimenez, Wu, Pesce & Jarabo 2016 (bent normals from the GTAO horizons); XeGTAO,
     ``XeGTAO.hlsli`` (the closed forms t0, t1).
 
     Examples
@@ -350,7 +350,7 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
             visibility += pn_len * (_inner_integral(h1, gamma, sin_g, cos_g)
                                     + _inner_integral(h2, gamma, sin_g, cos_g))
             if bent:
-                # Jimenez et al. 2016, Sec. 5 (Algorithm 2), in XeGTAO's form: the integral
+                # bent normal (Jimenez et al. 2016), XeGTAO's closed form: the integral
                 # of omega cos(theta - gamma) |sin theta| over the visible arc, along t and v
                 t_0 = (6.0 * np.sin(h1 - gamma) - np.sin(3.0 * h1 - gamma) + 6.0 * np.sin(h2 - gamma)
                        - np.sin(3.0 * h2 - gamma) + 16.0 * sin_g
