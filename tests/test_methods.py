@@ -23,10 +23,11 @@ def gb():
 
 def test_names_and_unknown_name_lists_them():
     vegetation = ("hegeman", "hegeman_ellipsoid", "hegeman_multishell", "reeves_blau")
-    assert methods.names() == ("point", "line", "area", "reference") + vegetation
-    assert methods.names(include_references=False) == ("point", "line", "area") + vegetation
-    with pytest.raises(ValueError, match="unknown method 'gtao'; expected one of point, line, area, reference, hegeman"):
-        methods.get("gtao")
+    baselines = ("gtao", "hbao", "alchemy", "sao")
+    assert methods.names() == ("point", "line", "area", "reference") + baselines + vegetation
+    assert methods.names(include_references=False) == ("point", "line", "area") + baselines + vegetation
+    with pytest.raises(ValueError, match="unknown method 'ssao'; expected one of point, line, area, reference, gtao"):
+        methods.get("ssao")
 
 
 @pytest.mark.parametrize("spec, labels", [
@@ -217,3 +218,39 @@ def test_reeves_blau_per_pixel_uses_the_leaves_extinction():
     outside = ~shell.contains(gb.world_position[gb.valid])
     assert outside.any() and np.all(got[gb.valid][outside] == 1.0)     # the ground: no interaction
     assert np.nanmin(got) < 0.9                                        # deep in the crown: attenuated
+
+
+# --------------------------------------------------------------------------- the engines' baselines
+@pytest.mark.parametrize("name, n, taps, quantity, reference", [
+    ("gtao", 3, 18, "cosine AO", "ao"), ("gtao", 9, 54, "cosine AO", "ao"),
+    ("hbao", 8, 32, "uniform AO", "ao_uniform"),
+    ("alchemy", 12, 12, "cosine AO", "ao"), ("sao", 12, 12, "cosine AO", "ao"),
+])
+def test_baselines_in_the_registry(name, n, taps, quantity, reference):
+    from vobscure import screenspace
+
+    m = methods.get(name)
+    assert m.taps(n) == taps and m.quantity(True) == quantity and m.reference() == reference
+    # the registry's cost is the estimator's own count
+    own = {"gtao": lambda k: 2 * k * methods.GTAO_STEPS, "hbao": lambda k: screenspace.hbao_taps(k, methods.HBAO_STEPS),
+           "alchemy": screenspace.alchemy_taps, "sao": screenspace.sao_taps}[name]
+    assert own(n) == taps
+
+
+def test_gtao_taps_are_the_fetches_it_makes(gb, monkeypatch):
+    calls = _count(monkeypatch, _common, "fetch_depth", lambda a, k: np.size(a[1]))
+    methods.Config("gtao", 2).run(gb, radius=0.2)
+    assert sum(calls) / gb.valid.sum() == methods.get("gtao").taps(2)
+
+
+def test_compare_runs_the_baselines_against_their_own_references():
+    res = vo.experiments.compare.compare("crease", size=(16, 12), methods="gtao:2,hbao:4,sao:8,line:5",
+                                         quick=True, cache=False, write=False, suggest=False)
+    assert set(res.provenance["references"]) == {"screen", "volumetric", "ao", "ao_uniform"}
+    rows = {r["label"]: r for r in res.rows}
+    assert rows["gtao:2"]["own_reference"] == "ao" and rows["hbao:4"]["own_reference"] == "ao_uniform"
+    assert rows["line:5"]["own_reference"] == "volumetric"
+    for r in rows.values():
+        assert np.isfinite(r["own_rmse"])
+    groups = {g["reference"] for g in res.summary["groups"]}
+    assert {"ao", "ao_uniform", "volumetric", "screen"} <= groups

@@ -19,7 +19,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau')
+('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -33,7 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from .estimate import DEFAULT_GROUPS
-from .screenspace import point_taps, vo_area, vo_line, vo_point, vo_reference
+from .screenspace import alchemy, gtao, hbao, point_taps, sao, vo_area, vo_line, vo_point, vo_reference
 from .trees.pixels import hegeman_gbuffer, reeves_blau_gbuffer
 
 __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
@@ -78,6 +78,7 @@ QUANTITIES = {
     "ball VO": Quantity("ball VO", "volumetric", normal_clamp=False, screen_limit=True),
     "half-ball VO": Quantity("half-ball VO", "volumetric", normal_clamp=True, screen_limit=True),
     "cosine AO": Quantity("cosine AO", "ao"),
+    "uniform AO": Quantity("uniform AO", "ao_uniform"),
     "sky visibility": Quantity("sky visibility", "sky"),
     "obscurance": Quantity("obscurance", "obscurance"),
 }
@@ -296,7 +297,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
@@ -337,6 +338,67 @@ register(Method("area", vo_area, default_samples=1, fetch="bspline", fetch_param
 register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_reference_taps,
                 summary="the converged screen-space VO (dense stratified points)", reference_only=True))
 
+
+
+# --------------------------------------------------------------------------- the engines' baselines
+def _cosine_ao(normal_clamp: bool = False) -> str:
+    """GTAO, Alchemy and SAO estimate cosine-weighted AO within the radius (Alchemy and SAO
+    their own obscurance, closest to it: docs/screenspace.md)."""
+    return "cosine AO"
+
+
+def _uniform_ao(normal_clamp: bool = False) -> str:
+    """HBAO estimates the uniformly weighted AO within the radius (with its attenuation, a
+    t^2 obscurance of it: docs/screenspace.md)."""
+    return "uniform AO"
+
+
+def _gtao_taps(n: int) -> int:
+    """GTAO with n slices of 3 steps a side: two taps a step."""
+    return 2 * int(n) * GTAO_STEPS
+
+
+def _hbao_taps(n: int) -> int:
+    """HBAO with n directions of 4 steps."""
+    return int(n) * HBAO_STEPS
+
+
+#: Steps per side of the registered ``gtao`` (XeGTAO's "high": 3 x 3) and per direction of ``hbao``.
+GTAO_STEPS = 3
+HBAO_STEPS = 4
+
+
+def _gtao(gbuffer, *, slices=3, **kwargs):
+    """GTAO with :data:`GTAO_STEPS` steps a side; ``normal_clamp`` does not apply (it is AO)."""
+    kwargs.pop("normal_clamp", None), kwargs.pop("thickness", None), kwargs.pop("falloff", None)
+    return gtao(gbuffer, slices=slices, steps=GTAO_STEPS, **kwargs)
+
+
+def _hbao(gbuffer, *, directions=8, **kwargs):
+    """HBAO with :data:`HBAO_STEPS` steps a direction."""
+    kwargs.pop("normal_clamp", None), kwargs.pop("thickness", None), kwargs.pop("falloff", None)
+    return hbao(gbuffer, directions=directions, steps=HBAO_STEPS, **kwargs)
+
+
+def _without_vo_options(fn):
+    def run(gbuffer, **kwargs):
+        kwargs.pop("normal_clamp", None), kwargs.pop("thickness", None), kwargs.pop("falloff", None)
+        return fn(gbuffer, **kwargs)
+    run.__name__ = run.__qualname__ = fn.__name__
+    run.__doc__ = fn.__doc__
+    return run
+
+
+register(Method("gtao", _gtao, default_samples=3, fetch="bilinear", samples="slices", taps=_gtao_taps,
+                quantity=_cosine_ao, summary="GTAO (Jimenez et al. 2016): horizons per slice, cosine AO; "
+                                             "SAMPLES = slices of 3 steps a side"))
+register(Method("hbao", _hbao, default_samples=8, fetch="nearest", fetch_parameter=None, samples="directions",
+                taps=_hbao_taps, quantity=_uniform_ao,
+                summary="HBAO (Bavoil et al. 2008): horizon angles, uniform AO; SAMPLES = directions of 4 steps"))
+register(Method("alchemy", _without_vo_options(alchemy), default_samples=12, fetch="nearest", fetch_parameter=None,
+                quantity=_cosine_ao, summary="Alchemy AO (McGuire et al. 2011): obscurance estimator on a disk"))
+register(Method("sao", _without_vo_options(sao), default_samples=12, fetch="nearest", fetch_parameter=None,
+                quantity=_cosine_ao, summary="SAO (McGuire et al. 2012): spiral samples, falloff (r^2 - v.v)^3"))
 
 def _no_taps(n: int) -> int:
     """An object-space model reads no depth buffer."""

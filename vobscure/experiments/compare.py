@@ -276,6 +276,11 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     elif references is None:
         references = tuple(r for r in DEFAULT_REFERENCES if r != "volumetric" or sc.is_watertight)
         references += ("sky",) if vegetation else ()
+        # and the reference of every requested method's own quantity (e.g. uniform AO for HBAO)
+        for c in configs:
+            own = c.reference(normal_clamp)
+            if own not in references and (own != "volumetric" or sc.is_watertight):
+                references += (own,)
     references = tuple(references)
     if not references:
         raise ValueError("references must name at least one of " + ", ".join(REFERENCES))

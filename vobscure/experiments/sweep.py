@@ -55,7 +55,7 @@ __all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "res
 #: References an estimate can be compared with: the converged screen-space VO
 #: (:func:`vobscure.vo_reference`, same settings as the estimate) and the ray-cast
 #: world-space VO, ambient occlusion within the radius and obscurance (linear falloff).
-REFERENCES = ("screen", "volumetric", "ao", "obscurance", "sky", "sky_uniform")
+REFERENCES = ("screen", "volumetric", "ao", "ao_uniform", "obscurance", "sky", "sky_uniform")
 #: The ray-cast sky visibility (ambient occlusion with no distance limit), cosine-weighted and
 #: uniform: the references of the vegetation models (Hegeman et al. 2006), whose paper does not
 #: say which of the two its "average probability over directions" means.
@@ -427,6 +427,8 @@ def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache):
         if name == "volumetric":
             params.update(samples=config.volume_samples, falloff=config.falloff,
                           normal_clamp=config.normal_clamp, allow_open=config.allow_open)
+        elif name == "ao_uniform":
+            params.update(quantity="ao", weighting="uniform", rays=config.rays)
         elif name in SKY_REFERENCES:
             params.update(quantity="ao", radius=None, weighting=SKY_REFERENCES[name], rays=config.rays)
         else:
