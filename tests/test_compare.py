@@ -266,3 +266,14 @@ def test_cli_compare_on_a_frame_file(tmp_path, capsys):
     assert float(rows[0]["screen_rmse"]) == pytest.approx(direct.rows[0]["screen_rmse"], rel=1e-6)
     assert main(["compare", "--gbuffer", str(tmp_path / "frame.exr"), "--out", str(out)]) == 2
     assert "--fov, --intrinsics or --projection" in capsys.readouterr().err
+
+
+def test_verdict_decomposes_only_vo_estimators_and_recommends_only_real_gains():
+    rows = [dict(_r("gtao:2", 0.07, 12, 0.12, ref="ao", sampling=0.45, screen=0.32, model=0.19), quantity="cosine AO"),
+            dict(_r("line:9", 0.009, 9, 0.317, sampling=0.034, screen=0.32, model=0.19), quantity="ball VO")]
+    v = C.verdict(rows)
+    assert [d["label"] for d in v["dominant"]] == ["line:9"] and v["dominant"][0]["dominant"] == "screen"
+    trials = [dict(label="line:9", radius=0.5, factor=f, thickness=f * 0.5, volumetric_rmse=e, volumetric_bias=0.0,
+                   seconds=0.006, baseline_rmse=0.0217) for f, e in ((0.25, 0.31), (2.0, 0.02169))]
+    text = " ".join(C.verdict(rows, thickness_trials=trials)["text"])
+    assert "no thickness beats none" in text and "Use --thickness" not in text

@@ -59,6 +59,8 @@ METRICS = ("rmse", "mae", "bias", "ssim")
 TARGET_FACTOR = 1.5
 #: Thicknesses (fractions of the radius) tried when the screen-space error dominates.
 SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
+#: A thickness is recommended only when it lowers the RMSE by at least this fraction.
+SUGGEST_MIN_GAIN = 0.02
 _TERM_NAMES = {"sampling": "sampling", "screen": "screen-space model", "model": "VO-vs-AO model"}
 
 parse_methods = _methods.parse
@@ -385,6 +387,7 @@ def _thickness_trials(rows, images, refs, gb, *, normal_clamp, seed, repeats) ->
 
     radius = rows[0]["radius"]
     cands = [r for r in rows if r["radius"] == radius and not r["reference_only"]
+             and _methods.QUANTITIES[r["quantity"]].screen_limit      # the thickness model is VO's
              and np.isfinite(r.get("volumetric_rmse", np.nan))]
     if not cands:
         return []
@@ -493,8 +496,13 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
                                                          else "no configuration fits."))
         text.append(" ".join(lines))
     # which error term dominates, for the most accurate configuration against the world-space VO
+    def vo_estimator(r):
+        # the decomposition (estimate - screen VO - world VO - AO) describes VO estimators only
+        q = r.get("quantity")
+        return q is None or _methods.QUANTITIES[q].screen_limit
+
     for radius in sorted({r["radius"] for r in shippable}):
-        sel = [r for r in shippable if r["radius"] == radius and "screen_error_rmse" in r]
+        sel = [r for r in shippable if r["radius"] == radius and "screen_error_rmse" in r and vo_estimator(r)]
         if not sel:
             continue
         best = min(sel, key=lambda r: r.get("volumetric_rmse", np.inf))
@@ -524,7 +532,7 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
         tried = ", ".join(f"{t['thickness']:.3g} ({t['factor']:g} R): {t['volumetric_rmse']:.4f}"
                           for t in thickness_trials)
         gain = best_t["baseline_rmse"] - best_t["volumetric_rmse"]
-        if gain > 0:
+        if gain > SUGGEST_MIN_GAIN * best_t["baseline_rmse"]:
             text.append(f"Thickness model (Loos & Sloan 2010, Sec. 4.3), measured on {best_t['label']}: "
                         f"RMSE against the world-space VO {best_t['baseline_rmse']:.4f} without it; {tried}. "
                         f"Use --thickness {best_t['thickness']:.3g}: RMSE {best_t['volumetric_rmse']:.4f} "
