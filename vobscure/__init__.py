@@ -15,7 +15,7 @@ from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flic
 from .raytrace import Tracer
 from .scenes import Scene
 from .screenspace import bilateral_blur, combine_radii, vo_area, vo_line, vo_point, vo_reference
-from . import methods, patterns, shading, trees
+from . import methods, objectspace, patterns, shading, trees
 
 
 def __getattr__(name):
@@ -53,6 +53,7 @@ __all__ = [
     "experiments",
     "flicker",
     "methods",
+    "objectspace",
     "ground_truth",
     "obscurance",
     "render_gbuffer",
