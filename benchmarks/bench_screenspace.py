@@ -106,6 +106,9 @@ RADIUS = 0.3
 #: the timed configurations (registry Configs, each method's default fetch), each run with
 #: normal_clamp False and True
 CONFIGS = (Config("point", 12), Config("point", 33), Config("line", 5), Config("line", 9), Config("area", 1))
+#: the engines' baselines (issue 13), timed without the normal clamp (they estimate AO, which
+#: has no clamp): GTAO "high" (3 slices x 3 steps a side) and SAO with 12 taps
+BASELINES = (Config("gtao", 3), Config("sao", 12))
 #: configurations measured for memory only, to show the trend with samples
 MEMORY_CONFIGS = (Config("line", 33), Config("line", 65))
 #: peak memory of the second of each pair minus the first's: "not growing with samples"
@@ -115,6 +118,8 @@ GROWTH_PAIRS = ((Config("point", 12), Config("point", 33)), (Config("line", 5), 
 READS_SIZE = 128
 #: goals
 GOAL_LINE_FLOOR = 1.5
+#: the baselines against the gather floor of their own taps (horizon marching is sequential)
+GOAL_BASELINE_FLOOR = 2.0
 GOAL_BYTES_PER_PIXEL = 100.0
 #: "not growing with samples": more samples may cost at most this many bytes per pixel more
 GOAL_GROWTH_BYTES = 1.0
@@ -144,7 +149,7 @@ class Bench:
 
 def configurations() -> list[Bench]:
     """Every timed configuration, without and then with the normal clamp."""
-    return [Bench(cfg, clamp) for clamp in (False, True) for cfg in CONFIGS]
+    return [Bench(cfg, clamp) for clamp in (False, True) for cfg in CONFIGS] + [Bench(cfg) for cfg in BASELINES]
 
 
 def warm_up(radius: float):
@@ -407,13 +412,16 @@ def bench_size(size: int, radius: float, repeats: int, reads: dict, report: Repo
         if b.method == "line":
             report.goal(label, ratio, GOAL_LINE_FLOOR, at_least=False)
     for b in configs:
-        if b.method != "line":
+        if b.config in BASELINES:
+            report.goal(f"{tag} {b.name} / gather floor ({b.config.texels} reads)",
+                        t[b.name].seconds / floor(b).seconds, GOAL_BASELINE_FLOOR, at_least=False)
+        elif b.method != "line":
             report.note(f"{tag} {b.name} / gather floor ({b.config.texels} reads)",
                         t[b.name].seconds / floor(b).seconds)
     line = max(c.texels for c in CONFIGS if c.method == "line")
     report.note(f"{tag} valid-pixel setup alone / gather floor ({line} reads)",
                 t["setup"].seconds / t[f"floor {line}"].seconds)
-    for method in dict.fromkeys(c.method for c in CONFIGS):
+    for method in dict.fromkeys(c.method for c in CONFIGS + BASELINES):
         worst = max((b for b in configs if b.method == method), key=lambda b: peaks[b.name])
         report.goal(f"{tag} peak memory, worst {method} ({worst.name})", peaks[worst.name],
                     GOAL_BYTES_PER_PIXEL, at_least=False, unit=" B/px")
