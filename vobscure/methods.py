@@ -368,25 +368,24 @@ GTAO_STEPS = 3
 HBAO_STEPS = 4
 
 
-def _gtao(gbuffer, *, slices=3, **kwargs):
-    """GTAO with :data:`GTAO_STEPS` steps a side; ``normal_clamp`` does not apply (it is AO)."""
-    kwargs.pop("normal_clamp", None), kwargs.pop("thickness", None), kwargs.pop("falloff", None)
-    return gtao(gbuffer, slices=slices, steps=GTAO_STEPS, **kwargs)
+#: The VO estimators' options that an AO estimator has no use for (AO has no half-ball,
+#: thickness model or VO falloff); the experiments pass them to every method.
+_VO_OPTIONS = ("normal_clamp", "thickness", "falloff")
 
 
-def _hbao(gbuffer, *, directions=8, **kwargs):
-    """HBAO with :data:`HBAO_STEPS` steps a direction."""
-    kwargs.pop("normal_clamp", None), kwargs.pop("thickness", None), kwargs.pop("falloff", None)
-    return hbao(gbuffer, directions=directions, steps=HBAO_STEPS, **kwargs)
-
-
-def _without_vo_options(fn):
+def _without_vo_options(fn, **fixed):
+    """``fn`` called without :data:`_VO_OPTIONS`, with ``fixed`` keywords added."""
     def run(gbuffer, **kwargs):
-        kwargs.pop("normal_clamp", None), kwargs.pop("thickness", None), kwargs.pop("falloff", None)
-        return fn(gbuffer, **kwargs)
+        for name in _VO_OPTIONS:
+            kwargs.pop(name, None)
+        return fn(gbuffer, **fixed, **kwargs)
     run.__name__ = run.__qualname__ = fn.__name__
     run.__doc__ = fn.__doc__
     return run
+
+
+_gtao = _without_vo_options(gtao, steps=GTAO_STEPS)
+_hbao = _without_vo_options(hbao, steps=HBAO_STEPS)
 
 
 register(Method("gtao", _gtao, default_samples=3, fetch="bilinear", samples="slices", taps=_gtao_taps,
