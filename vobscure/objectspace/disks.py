@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_array, as_points, as_unit_vectors, check_int, check_positive
-from .scenes import as_scene
+from .._validate import as_array, as_points, as_unit_vectors, check_int, check_positive
+from ..scenes import as_scene
 
 __all__ = ["bunnell", "disk_shadow", "vertex_disks"]
 
