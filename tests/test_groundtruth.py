@@ -377,3 +377,84 @@ def test_one_progress_default_and_sample_names():
         assert "samples" in params and "rays" not in params, fn.__name__
     for fn in (vo.volumetric_obscurance, vo.ground_truth, vo.vo_reference):
         assert inspect.signature(fn).parameters["normal_clamp"].default is False, fn.__name__
+
+
+# ----------------------------------------------------------------------------- interreflections
+ALBEDO = 0.6
+CAVITY_OPENING = 0.5  # the opening is the cap y > 0.5 of the unit sphere: a quarter of its area
+
+
+@pytest.fixture(scope="module")
+def cavity():
+    """A unit sphere with a polar cap removed, seen from inside, and its opening fraction f
+    (from the mesh's own areas, so that the faceting does not bias f)."""
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(subdivisions=5, radius=1.0)
+    keep = sphere.triangles_center[:, 1] < CAVITY_OPENING
+    f = float(sphere.area_faces[~keep].sum() / sphere.area_faces.sum())
+    mesh = trimesh.Trimesh(sphere.vertices, sphere.faces[keep], process=False)
+    rng = np.random.default_rng(5)
+    faces = rng.choice(np.flatnonzero(keep[keep]), 16, replace=False)
+    return mesh, mesh.triangles_center[faces], -mesh.face_normals[faces], f
+
+
+@pytest.mark.parametrize("bounces", [1, 2, 40])
+def test_interreflections_in_a_spherical_cavity(cavity, bounces):
+    # Inside a sphere every point sees every area element with the same form factor, so
+    # k_A = f and k'_A = f * sum_{b <= N} (a (1 - f))^b at every interior point; with many
+    # bounces this is Stewart & Langer's k_A / (1 - a (1 - k_A)) (RTR Eq. 9.23).
+    mesh, p, n, f = cavity
+    e = vo.ambient_occlusion(mesh, p, n, rays=2048, bounces=bounces, albedo=ALBEDO, groups=GROUPS, seed=3)
+    exact = f * sum((ALBEDO * (1.0 - f)) ** b for b in range(bounces + 1))
+    assert_unbiased(e, np.full(len(p), exact), df=DF)
+    # pooled over the points (independent estimates): a test with sqrt(16) times the power
+    pooled = (e.value - exact).sum() / np.sqrt((e.stderr ** 2).sum())
+    assert abs(pooled) < t_threshold(DF * len(p)), f"pooled t {pooled:.2f}"
+    if bounces == 40:
+        assert exact == pytest.approx(float(vo.shading.stewart_langer(f, ALBEDO)), rel=1e-8)
+
+
+def test_interreflections_only_add_light(crease, slab):
+    # The primary rays are the same draws with and without bounces (same seed), and a path
+    # that escapes at once brings 1 either way: light reflected by the occluders only adds.
+    p, n = crease_points([0.02, 0.1, 0.3])
+    plain = vo.ambient_occlusion(crease, p, n, rays=256, seed=4)
+    assert vo.ambient_occlusion(crease, p, n, rays=256, seed=4, bounces=0, albedo=0.7).value.tolist() == \
+        plain.value.tolist()
+    assert vo.ambient_occlusion(crease, p, n, rays=256, seed=4, bounces=3, albedo=0.0).value.tolist() == \
+        plain.value.tolist()
+    lit = vo.ambient_occlusion(crease, p, n, rays=256, seed=4, bounces=2, albedo=0.7)
+    assert np.all(lit.value > plain.value)
+    # nothing to reflect on an open plane: exactly 1 whatever the albedo
+    open_plane = vo.ambient_occlusion(slab, [[0, 0, 0]], [[0, 1, 0]], rays=64, bounces=3, albedo=1.0)
+    assert open_plane.value.tolist() == [1.0]
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(bounces=-1, albedo=0.5), "bounces"),
+    (dict(bounces=1.5, albedo=0.5), "bounces"),
+    (dict(bounces=1, albedo=1.5), "albedo"),
+    (dict(bounces=1, albedo=-0.1), "albedo"),
+    (dict(bounces=1, albedo=float("nan")), "albedo"),
+    (dict(bounces=1, albedo="white"), "albedo"),
+    (dict(bounces=1, albedo=0.5, bent_normals=True), "bent_normals"),
+])
+def test_interreflection_bad_arguments(crease, kwargs, match):
+    p, n = crease_points([0.5])
+    with pytest.raises(ValueError, match=match):
+        vo.ambient_occlusion(crease, p, n, **kwargs)
+
+
+def test_ground_truth_per_pixel_interreflections(crease):
+    cam = vo.Camera.look_at((2.0, 2.0, 3.0), (0.5, 0.3, 0.0), size=(12, 8), fov_y=50.0)
+    gb = vo.render_gbuffer(crease, cam)
+    plain = vo.ground_truth(crease, gb, quantity="ao", rays=64, seed=1)
+    lit = vo.ground_truth(crease, gb, quantity="ao", rays=64, seed=1, bounces=2, albedo=0.8)
+    assert np.array_equal(np.isnan(lit.value), ~gb.valid)
+    occluded = gb.valid & (plain.value < 1.0)
+    assert occluded.sum() > 5
+    assert np.all(lit.value[occluded] > plain.value[occluded])
+    assert np.array_equal(lit.value[gb.valid & ~occluded], plain.value[gb.valid & ~occluded])
+    with pytest.raises(ValueError, match="quantity='ao' only"):
+        vo.ground_truth(crease, gb, quantity="obscurance", radius=R, bounces=1, albedo=0.5)

@@ -28,8 +28,8 @@ from tqdm.auto import tqdm
 
 from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
 from .estimate import DEFAULT_GROUPS, Estimate
-from .raytrace import CHUNK_RAYS, parallel_map
-from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base,
+from .raytrace import CHUNK_RAYS, Hits, parallel_map
+from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base, to_world,
                        square_to_cosine_hemisphere, square_to_uniform_hemisphere)
 from .scenes import Scene, as_scene
 
@@ -121,16 +121,57 @@ def _hemisphere_rays(tracer, points, normals, offset_normals, base, shifts, weig
     return origins.reshape(-1, 3), dirs.reshape(-1, 3), dirs
 
 
+def _bounce_paths(tracer, o, d, max_distance, bounces, albedo, rng):
+    """Radiance carried back along each primary ray under a white sky of radiance 1.
+
+    Every surface is Lambertian with ``albedo``; a path that leaves the scene (or travels
+    farther than ``max_distance``) after b diffuse reflections brings ``albedo**b``; a path
+    still inside after ``bounces`` reflections brings 0. Continuation directions are
+    cosine-distributed about the hit's normal (turned to face the incoming ray), which is the
+    importance sampling that makes each reflection's weight exactly the albedo
+    (Lambertian BRDF a / pi times cos / pdf with pdf = cos / pi).
+
+    o, d : (R, 3) float32 primary ray origins and directions. Returns (R,) float64.
+    """
+    value = np.zeros(len(o))
+    alive = np.arange(len(o))
+    weight = 1.0
+    for b in range(bounces + 1):
+        hits = tracer.intersect(o, d, max_distance, threads=1)
+        escaped = ~hits.hit
+        value[alive[escaped]] += weight
+        if b == bounces or albedo == 0.0:
+            break
+        keep = hits.hit
+        alive = alive[keep]
+        if not len(alive):
+            break
+        q = tracer.hit_points(Hits(hits.distance[keep], hits.primitive[keep], hits.barycentric[keep]))
+        n_q = tracer.face_normals[hits.primitive[keep]]
+        d_in = d[keep].astype(np.float64)
+        # two-sided surfaces: the normal of the side the ray arrived on
+        n_q = np.where((np.einsum("ij,ij->i", n_q, d_in) > 0.0)[:, None], -n_q, n_q)
+        local = square_to_cosine_hemisphere(rng.random((len(q), 1, 2)))
+        d_out = to_world(local, n_q)                                    # (R, 1, 3)
+        o = tracer.offset_origins(q, n_q, d_out)[:, 0, :]
+        d = d_out[:, 0, :].astype(np.float32)
+        weight *= albedo
+    return value
+
+
 def _ao(scene, points, normals, offset_normals, *, rays, weighting, max_distance, seed,
-        bent_normals, groups, threads, progress, desc="ambient occlusion"):
+        bent_normals, groups, threads, progress, bounces=0, albedo=0.0, desc="ambient occlusion"):
     tracer = scene.tracer
     g, m = _groups(rays, groups, "rays")
     rng = as_rng(seed)
 
-    def kernel(s, base, shifts, _rng):
+    def kernel(s, base, shifts, child):
         o, d, dirs = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], base, shifts, weighting)
-        free = ~tracer.occluded(o, d, max_distance, threads=1)
         P = len(shifts)
+        if bounces:
+            carried = _bounce_paths(tracer, o, d, max_distance, bounces, albedo, child)
+            return carried.reshape(P, g, m).mean(axis=2)
+        free = ~tracer.occluded(o, d, max_distance, threads=1)
         means = free.reshape(P, g, m).mean(axis=2)
         if not bent_normals:
             return means
@@ -148,8 +189,18 @@ def _ao(scene, points, normals, offset_normals, *, rays, weighting, max_distance
     return Estimate(value=value, stderr=stderr, samples=g * m, bent_normal=bent)
 
 
+def _check_bounces(bounces, albedo) -> tuple[int, float]:
+    """Validated (bounces, albedo); bounces 0 when the albedo is 0 (black occluders)."""
+    bounces = check_int(bounces, "bounces", minimum=0)
+    if isinstance(albedo, (str, bool)) or np.ndim(albedo) != 0 or not 0.0 <= float(albedo) <= 1.0:
+        raise ValueError(f"albedo must be a number in [0, 1], got {albedo!r}")
+    albedo = float(albedo)
+    return (bounces if albedo > 0.0 else 0), albedo
+
+
 def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str = "cosine",
                       max_distance: float = np.inf, seed=0, bent_normals: bool = False,
+                      bounces: int = 0, albedo: float = 0.0,
                       groups: int = DEFAULT_GROUPS, threads: int | None = None,
                       progress: bool = False) -> Estimate:
     r"""Ambient occlusion k_A at surface points by ray casting (visibility: 1 = open).
@@ -159,6 +210,20 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
     (RTR 3rd ed. Sec. 9.2, Eq. 9.14), or the unweighted hemisphere average
     :math:`\frac{1}{2\pi}\int_\Omega v \, d\omega` with ``weighting="uniform"``. v is 0 where
     the ray hits geometry within ``max_distance``.
+
+    With ``bounces=N > 0`` the occluders are not black: every surface is Lambertian with
+    ``albedo`` a and the sky has radiance 1, so that a ray blocked at q brings back the light
+    q reflects, and the result is the irradiance at p over pi, light reflected up to N times:
+
+    .. math:: k'_A(p) = \frac{1}{\pi} \int_\Omega \big[v(p, l) + (1 - v(p, l))\, a\,
+              k'_{A, N-1}(q(p, l))\big] \cos\theta \, d\omega, \quad k'_{A,0} = k_A
+
+    the quantity that the interreflection corrections of RTR Sec. 9.2.1 (Stewart & Langer,
+    Eqs. 9.22-9.23; Jimenez et al. 2016's multi-bounce fit) approximate from k_A alone
+    (:mod:`vobscure.shading`). Each path's contribution is a^b after b reflections before it
+    leaves the scene, 0 if it has not left after N (path tracing with cosine-distributed
+    continuation, for which each reflection's weight is exactly a). A surface reflects on
+    both sides. ``bounces=0`` (or ``albedo=0``) is plain k_A, bit for bit.
 
     Parameters
     ----------
@@ -177,6 +242,11 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
     seed : int, Generator or None
     bent_normals : bool
         Also return the bent normals (the normalized mean unoccluded direction, RTR 9.2.1).
+        Not with ``bounces`` > 0 (compute them in a separate call).
+    bounces : int
+        Diffuse reflections followed, >= 0 (0: black occluders, plain k_A).
+    albedo : float
+        The surfaces' reflectance a in [0, 1] with ``bounces`` > 0; 0 gives plain k_A.
     groups : int
         Independent randomizations (stderr degrees of freedom + 1).
     threads : int, optional
@@ -189,9 +259,22 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
         ``value`` and ``stderr`` of shape (n,); ``bent_normal`` (n, 3) if requested
         (equal to the normal where every ray was blocked).
 
+    Notes
+    -----
+    A closed form for the multi-bounce case: inside a sphere of radius R, any two points see
+    each other with the same form factor per unit area, :math:`dA / (4 \pi R^2)`. In a
+    spherical cavity whose opening is a fraction f of the sphere's area, every interior point
+    therefore has :math:`k_A = f` and the same :math:`k'_A`, which solves
+    :math:`k' = f + a (1 - f) k'` in the limit of many bounces, and is the partial geometric sum
+    :math:`f \sum_{b=0}^{N} (a (1 - f))^b` with N bounces: Stewart and Langer's correction
+    :math:`k_A / (1 - a (1 - k_A))` (RTR Eq. 9.23, :func:`vobscure.shading.stewart_langer`) is
+    exact there. ``tests/test_groundtruth.py`` checks the tracer against it.
+
     References
     ----------
-    Akenine-Moller, Haines & Hoffman, Real-Time Rendering 3rd ed., Sec. 9.2, Eq. 9.14.
+    Akenine-Moller, Haines & Hoffman, Real-Time Rendering 3rd ed., Sec. 9.2, Eq. 9.14;
+    Sec. 9.2.1, Eqs. 9.22-9.23 (interreflections). Stewart & Langer, "Toward Accurate
+    Recovery of Shape from Shading under Diffuse Lighting", IEEE PAMI 19(9), 1997.
 
     Examples
     --------
@@ -206,9 +289,13 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
     rays = check_int(rays, "rays", minimum=2)
     check_choice(weighting, "weighting", _WARPS)
     max_distance = check_positive(max_distance, "max_distance", allow_inf=True)
+    bounces, albedo = _check_bounces(bounces, albedo)
+    if bounces and bent_normals:
+        raise ValueError("bent_normals is not available with bounces > 0: the bent normal is a property of "
+                         "the black-occluder visibility; compute it in a call with bounces=0")
     return _ao(scene, points, normals, normals, rays=rays, weighting=weighting,
                max_distance=max_distance, seed=seed, bent_normals=bool(bent_normals),
-               groups=groups, threads=threads, progress=progress)
+               groups=groups, threads=threads, progress=progress, bounces=bounces, albedo=albedo)
 
 
 def _rho(falloff):
@@ -449,7 +536,7 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
                  rays: int = 256, samples: int = 4096, falloff=None, weighting: str = "cosine",
                  normal_clamp: bool = False, seed=0, votes: int = 3, progress: bool = False,
                  groups: int = DEFAULT_GROUPS, threads: int | None = None,
-                 allow_open: bool = False) -> Estimate:
+                 allow_open: bool = False, bounces: int = 0, albedo: float = 0.0) -> Estimate:
     """The ray-cast reference at every pixel of a G-buffer.
 
     Parameters
@@ -472,6 +559,9 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         "constant" for volumetric). Unused for ao.
     weighting, normal_clamp, seed, groups, threads, allow_open
         Passed on.
+    bounces, albedo
+        Interreflections for ``"ao"`` (see :func:`ambient_occlusion`); an error for the
+        other quantities when ``bounces`` > 0.
     votes : int
         Odd number of rays per inside test of the volumetric ball (default 3; see
         :func:`volumetric_obscurance`). Unused for ao and obscurance.
@@ -499,6 +589,9 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
     elif quantity != "ao":
         raise ValueError(f"radius is required for quantity={quantity!r}")
+    bounces, albedo = _check_bounces(bounces, albedo)
+    if bounces and quantity != "ao":
+        raise ValueError(f"bounces > 0 is defined for quantity='ao' only, got quantity={quantity!r}")
     valid = gbuffer.valid
     hits = gbuffer.hits  # per covered pixel, row-major: the order of a boolean mask
     points, normals, geo = hits["world_position"], hits["world_normal"], hits["world_geometric_normal"]
@@ -507,7 +600,8 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         check_choice(weighting, "weighting", _WARPS)
         est = _ao(scene, points, normals, geo, rays=check_int(rays, "rays", minimum=2),
                   weighting=weighting, max_distance=np.inf if radius is None else radius, seed=seed,
-                  bent_normals=False, groups=groups, threads=threads, progress=progress, desc=desc)
+                  bent_normals=False, groups=groups, threads=threads, progress=progress, desc=desc,
+                  bounces=bounces, albedo=albedo)
     elif quantity == "obscurance":
         check_choice(weighting, "weighting", _WARPS)
         est = _obscurance(scene, points, normals, geo, radius=radius,
