@@ -6,7 +6,8 @@
   entries whose file is missing are dropped, and every other Markdown page of the docs
   folder is appended under "More".
 - ``SphinxMarkup``, a griffe extension used by mkdocstrings, turns the Sphinx markup of the
-  numpydoc docstrings into Markdown.
+  numpydoc docstrings into Markdown, their mathematics into the ``$...$`` / ``$$...$$`` that
+  pymdownx.arithmatex hands to the site's KaTeX (mkdocs.yml).
 
 Nothing here downloads anything.
 """
@@ -54,11 +55,13 @@ def on_config(config, **kwargs):
 # The docstrings are written for numpydoc/Sphinx: cross-reference roles (:func:`x`,
 # :class:`~a.B`), ``.. math::`` directives, ``.. [1]`` citations and ``text::`` before a
 # literal block, which Markdown would show verbatim. Roles become code spans naming the object
-# (the last component for ``~``); a math directive becomes a code block holding its LaTeX
-# source (the site loads no math renderer); a citation keeps its label, ``[1]``; ``::`` at
-# the end of a line becomes ``:`` (the indented block after it is code in Markdown too).
+# (the last component for ``~``); a :math: role becomes inline math, $...$, and a math
+# directive display math, a $$ ... $$ block, which pymdownx.arithmatex passes to KaTeX; a
+# citation keeps its label, ``[1]``; ``::`` at the end of a line becomes ``:`` (the indented
+# block after it is code in Markdown too).
 
-_ROLE = re.compile(r":(?:py:)?(?:func|class|meth|mod|attr|data|obj|exc|const|math):`(~?)([^`]+)`")
+_ROLE = re.compile(r":(?:py:)?(?:func|class|meth|mod|attr|data|obj|exc|const):`(~?)([^`]+)`")
+_MATH_ROLE = re.compile(r":math:`([^`]+)`")
 _CITATION = re.compile(r"^(\s*)\.\. (\[[^\]]+\])", flags=re.M)
 _LITERAL = re.compile(r"(\S)::$", flags=re.M)
 _MATH = re.compile(r"^(\s*)\.\. math::\s*(.*)$")
@@ -71,6 +74,16 @@ def _code_span(match: re.Match) -> str:
     return f"`{target}`"
 
 
+def _inline_math(match: re.Match) -> str:
+    # on one line, without blanks next to the dollars: arithmatex does not read "$ x $" as
+    # math (smart dollars keep prices such as "$5 and $6" as text)
+    return "$" + " ".join(match.group(1).split()) + "$"
+
+
+def _indent(line: str) -> int:
+    return len(line) - len(line.lstrip())
+
+
 def _math_blocks(text: str) -> str:
     lines = text.split("\n")
     out: list[str] = []
@@ -81,18 +94,21 @@ def _math_blocks(text: str) -> str:
             out.append(lines[i])
             i += 1
             continue
-        indent, body = m.group(1), [m.group(2)] if m.group(2).strip() else []
+        indent, body = m.group(1), [m.group(2).strip()] if m.group(2).strip() else []
         i += 1
-        if not body:  # the block form: an indented body after the directive
+        if not body:  # the block form: blank lines, then the indented body
             while i < len(lines) and not lines[i].strip():
                 i += 1
-            while i < len(lines) and (not lines[i].strip() or
-                                      len(lines[i]) - len(lines[i].lstrip()) > len(indent)):
-                body.append(lines[i].strip())
-                i += 1
-            while body and not body[-1]:
-                body.pop()
-        out += [indent + "```text", *(indent + b for b in body), indent + "```"]
+        # the body (or the continuation of a one-line directive): the lines indented deeper
+        # than the directive, up to the first line that is not
+        while i < len(lines) and (not lines[i].strip() or _indent(lines[i]) > len(indent)):
+            body.append(lines[i].strip())
+            i += 1
+        while body and not body[-1]:
+            body.pop()
+        if out and out[-1].strip():
+            out.append("")  # arithmatex reads a $$ block only as a paragraph of its own
+        out += [indent + "$$", *(indent + b for b in body if b), indent + "$$"]
         if i < len(lines) and lines[i].strip():
             out.append("")
     return "\n".join(out)
@@ -107,6 +123,7 @@ class SphinxMarkup(griffe.Extension):
             return
         value = doc.value
         if ":`" in value:
+            value = _MATH_ROLE.sub(_inline_math, value)
             value = _ROLE.sub(_code_span, value)
         if ".. math::" in value:
             value = _math_blocks(value)
