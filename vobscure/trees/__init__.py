@@ -3,7 +3,9 @@
 ``shells``: the spheres, ellipsoids and sets of shells that enclose a canopy, and their
 fits to a point cloud; ``canopy``: the canopy visibility of Eqs. 4-6, the Reeves-Blau
 baseline, and the density (alpha rho) fitted to a reference or predicted from leaf
-statistics. See ``docs/trees.md``.
+statistics; ``poisson``: the visibility a Poisson leaf cloud has in expectation (the chord
+transmittance integrated over the hemisphere, tabulated for spheres), the one implementation
+that the ``"porous"`` occluder model of ``occluders`` shares. See ``docs/trees.md``.
 """
 
 from .shells import (
@@ -16,6 +18,7 @@ from .shells import (
     shells_from_points,
 )
 from .canopy import canopy_visibility, fit_density, optical_depth, predict_density, reeves_blau
+from .poisson import extinction, poisson_quadrature, poisson_visibility, sphere_transmittance
 from .occluders import grass_visibility, occluder_visibility, sphere_occlusion
 
 __all__ = [
@@ -34,4 +37,8 @@ __all__ = [
     "grass_visibility",
     "occluder_visibility",
     "sphere_occlusion",
+    "extinction",
+    "poisson_visibility",
+    "poisson_quadrature",
+    "sphere_transmittance",
 ]

@@ -4,13 +4,14 @@
 near trees enclosed in spheres: the paper's solid-angle approximation (Eqs. 7-8), the exact
 occlusion of an opaque sphere (closed forms, horizon included), and the sphere as a porous
 medium (the chord transmittance of the canopy's Poisson leaf cloud, integrated over the
-hemisphere). ``sphere_occlusion`` is the exact opaque-sphere term on its own.
+hemisphere by :func:`vobscure.trees.poisson.sphere_transmittance`, the one implementation of
+it, shared with the canopy model :func:`vobscure.trees.poisson_visibility`).
+``sphere_occlusion`` is the exact opaque-sphere term on its own.
 ``grass_visibility`` is Eq. 9. See ``docs/trees.md``, "Occluders and grass".
 """
 
 from __future__ import annotations
 
-import math
 import numbers
 from collections.abc import Sequence
 
@@ -18,6 +19,7 @@ import numpy as np
 
 from .._validate import as_array, as_points, as_unit_vectors, check_choice, check_int, check_positive
 from ._arrays import as_raw_points, out_dtype
+from .poisson import sphere_transmittance
 from .shells import Sphere
 
 __all__ = [
@@ -48,8 +50,8 @@ DEFAULT_QUADRATURE = 16
 POROUS_QUADRATURE_ERROR = 1e-6
 #: Points per chunk: temporaries are a few hundred bytes times this, whatever the input size.
 DEFAULT_CHUNK = 1 << 15
-#: Largest chunk of the porous model, whose temporaries are about 500 bytes per point (the
-#: chord computation's (m, 3) arrays): 4 MB, with no measurable loss of speed.
+#: Largest chunk of the porous model (whose quadrature, ``sphere_transmittance``, works in
+#: blocks of its own of (m, 4 x quadrature) chords and weights).
 POROUS_CHUNK = 1 << 13
 #: How far outside [-1, 1] ``grass_visibility`` accepts cos_theta as rounding (clipped);
 #: further is an error.
@@ -95,14 +97,6 @@ def _sin_alpha(d: np.ndarray, r: float) -> np.ndarray:
     return np.where(outside, r / np.where(outside, d, 1.0), 1.0)
 
 
-def _onb_perpendicular(c: np.ndarray) -> np.ndarray:
-    """A unit vector perpendicular to each unit c (Duff et al. 2017, branchless ONB)."""
-    sign = np.where(c[:, 2] >= 0, 1.0, -1.0)
-    a = -1.0 / (sign + c[:, 2])
-    b = c[:, 0] * c[:, 1] * a
-    return np.stack([1.0 + sign * c[:, 0] * c[:, 0] * a, sign * b, -sign * c[:, 0]], axis=1)
-
-
 # ----------------------------------------------------------------------------- the models
 def _hegeman(d, r, cos_theta):
     q = _sin_alpha(d, r)                       # r / d, clamped to 1 on and inside the sphere
@@ -140,73 +134,6 @@ def _exact_occlusion(d, r, cos_theta, weighting):
         cut = (np.pi - np.arccos(ratio) - cos_a * np.arccos(y)) / np.pi
     occluded = np.where(above, full, np.where(partial, cut, 0.0))
     return np.where(d < r, 1.0, np.clip(occluded, 0.0, 1.0))
-
-
-def _porous_occlusion(x, n, sphere, sigma, weighting, nodes, weights):
-    """1 - visibility of a porous sphere: the integral over the cap of (1 - exp(-sigma L)).
-
-    The cap is parametrized by psi (angle from the direction c to the centre) and the
-    azimuth phi about c; the chord L depends on psi only, and the azimuth integral of the
-    weight over the arc above the horizon is closed-form, which leaves a 1-D integral in psi,
-    split where that integral has kinks.
-    """
-    r = sphere.radius
-    d, D, cos_theta = _to_center(x, n, sphere)
-    c = np.divide(D, d[:, None], out=n.copy(), where=d[:, None] > 0)   # unit direction to the centre
-    theta = np.arccos(cos_theta)
-    sin_t = np.sin(theta)
-    outside = d > r
-    alpha = np.where(outside, np.arcsin(_sin_alpha(d, r)), np.pi)   # all directions from inside
-    p = _onb_perpendicular(c)
-    # Kinks: the ring psi (angles from n between |theta - psi| and pi - |pi - theta - psi|)
-    # meets the horizon from psi_1 = |pi/2 - theta| and lies wholly on one side of it again
-    # from psi_2 = pi - psi_1; from inside the sphere the chord d cos psi + sqrt(r^2 -
-    # d^2 sin^2 psi) also bends sharply at psi = pi/2 when d is close to r (a corner at
-    # d = r). psi_1 <= pi/2 <= psi_2, and alpha < pi/2 outside the sphere, so a point
-    # outside has two pieces and a point inside four.
-    psi_1 = np.minimum(np.abs(0.5 * np.pi - theta), alpha)
-    mid = np.minimum(0.5 * np.pi, alpha)
-    occluded = _ring_integral(x, c, p, cos_theta, sin_t, sphere, sigma, weighting, nodes, weights,
-                              ((0.0, psi_1), (psi_1, mid)))
-    inside = np.flatnonzero(~outside)
-    if inside.size:
-        i = inside
-        psi_2 = np.pi - psi_1[i]
-        occluded[i] += _ring_integral(x[i], c[i], p[i], cos_theta[i], sin_t[i], sphere, sigma, weighting,
-                                      nodes, weights, ((0.5 * np.pi, psi_2), (psi_2, np.pi)))
-    return np.clip(occluded, 0.0, 1.0)
-
-
-def _ring_integral(x, c, p, cos_theta, sin_t, sphere, sigma, weighting, nodes, weights, pieces):
-    """Sum over ``pieces`` (a, b) of int_a^b (1 - exp(-sigma L(psi))) ring(psi) sin(psi) dpsi."""
-    occluded = np.zeros(len(x))
-    opaque = math.isinf(sigma)
-    for a, b in pieces:
-        half = 0.5 * (b - a)
-        for t, w in zip(nodes, weights):
-            # psi = a + (b - a)(1 - cos t)/2, t in [0, pi]: removes the square-root
-            # endpoint behaviour of L at psi = alpha and of the arc length at the kinks
-            psi = a + half * (1.0 - math.cos(t))
-            cos_p, sin_p = np.cos(psi), np.sin(psi)
-            L = sphere.chord_length(x, cos_p[:, None] * c + sin_p[:, None] * p)
-            absorbed = (L > 0).astype(float) if opaque else -np.expm1(-sigma * L)
-            # half-width phi_m of the arc above the horizon: n.w = cos psi cos theta +
-            # sin psi sin theta cos phi > 0  <=>  cos phi > -cot psi cot theta
-            num, den = -cos_p * cos_theta, sin_p * sin_t
-            ratio = np.divide(num, den, out=np.where(num < 0, -2.0, 2.0), where=den > 0)
-            phi_m = np.arccos(np.clip(ratio, -1.0, 1.0))
-            if weighting == "cosine":   # (1/pi) int cos(angle to n) dphi over |phi| < phi_m
-                ring = (2.0 / np.pi) * (phi_m * cos_p * cos_theta + sin_p * sin_t * np.sin(phi_m))
-            else:                       # (1 / 2 pi) int dphi over |phi| < phi_m
-                ring = phi_m / np.pi
-            occluded += (half * math.sin(t) * w) * absorbed * np.maximum(ring, 0.0) * sin_p
-    return occluded
-
-
-def _gauss_nodes(count: int):
-    """Gauss-Legendre nodes and weights on [0, pi]."""
-    z, w = np.polynomial.legendre.leggauss(count)
-    return (0.5 * np.pi * (z + 1.0)).tolist(), (0.5 * np.pi * w).tolist()
 
 
 # ----------------------------------------------------------------------------- public API
@@ -359,8 +286,8 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     the centre, 1 facing away).
 
     **porous**: V = 1 - int w(omega) (1 - exp(-sigma L(omega))) d omega over the hemisphere,
-    L the chord of the ray in the sphere (``Sphere.chord_length``; from the point to the exit
-    when the point is inside). The integral is over the cap of directions that meet the
+    L the chord of the ray in the sphere (from the point to the exit when the point is
+    inside), evaluated by :func:`vobscure.trees.poisson.sphere_transmittance`. The integral is over the cap of directions that meet the
     sphere, in the angle psi from the direction to the centre (the chord depends on psi
     only) and the azimuth about it, whose integral over the arc above the horizon is done in
     closed form; the remaining integral in psi is split at the two angles where the arc
@@ -409,7 +336,7 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
             raise ValueError("model='porous' needs sigma, the extinction per unit length "
                              "(sigma = 2 pi R^2 alpha_rho / 3 from the canopy density alpha_rho)")
         sigmas = _as_sigmas(sigma, len(spheres))
-        nodes, weights = _gauss_nodes(check_int(quadrature, "quadrature", minimum=1))
+        quadrature = check_int(quadrature, "quadrature", minimum=1)
     elif sigma is not None:
         raise ValueError(f"sigma is used by model='porous' only, not by model={model!r}")
     if model == "porous":
@@ -423,7 +350,8 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
         V = np.ones(len(x))
         for k, sphere in enumerate(spheres):
             if model == "porous":
-                V *= 1.0 - _porous_occlusion(x, nrm, sphere, sigmas[k], weighting, nodes, weights)
+                V *= sphere_transmittance(x, nrm, sphere, extinction=float(sigmas[k]), weighting=weighting,
+                                          quadrature=quadrature)
                 continue
             d, _, cos_theta = _to_center(x, nrm, sphere)
             if model == "hegeman":
