@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import html
 import importlib.util
+import json
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -13,6 +16,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 BUILD_TIMEOUT = 300  # seconds; the build takes about 5 s
+KATEX = "assets/katex"  # where the site serves its own KaTeX (docs/assets/katex/PROVENANCE.txt)
+KATEX_VERSION = "0.19.1"
+NODE_TIMEOUT = 60  # seconds; KaTeX typesets every formula of the site in about 1 s
 
 needs_mkdocs = pytest.mark.skipif(
     importlib.util.find_spec("mkdocs") is None or importlib.util.find_spec("mkdocstrings") is None,
@@ -150,3 +156,134 @@ def test_methods_page_examples_run(capsys):
             methods.unregister("random_points")
     out = capsys.readouterr().out
     assert "point:33 32 128 half-ball VO" in out
+
+
+# --- mathematics: KaTeX served by the site itself, formulas as arithmatex spans -------------
+
+_TAG = re.compile(r"<(script|link)\b([^>]*)>", flags=re.I)
+_ATTR = re.compile(r"""\b(src|href)\s*=\s*["']([^"']*)["']""", flags=re.I)
+_MATH_SPAN = re.compile(r'<(span|div) class="arithmatex">(.*?)</\1>', flags=re.S)
+
+
+def _html_pages(site: Path) -> list[Path]:
+    return sorted(p for p in site.rglob("*.html") if p.name != "404.html")
+
+
+def _loaded_urls(page_html: str) -> list[str]:
+    """The URLs a page loads by itself: script sources and the hrefs of <link> elements
+    (stylesheets, icons). Hyperlinks (<a href>) are only followed when clicked."""
+    urls = []
+    for _, attrs in _TAG.findall(page_html):
+        urls += [value for _, value in _ATTR.findall(attrs)]
+    return urls
+
+
+def _formulas(site: Path) -> list[tuple[str, bool, str]]:
+    """(page, display, TeX) of every formula that arithmatex left in the built site."""
+    found = []
+    for page in _html_pages(site):
+        for tag, body in _MATH_SPAN.findall(page.read_text()):
+            tex = html.unescape(body).strip()
+            if tex[:2] in ("\\(", "\\[") and tex[-2:] in ("\\)", "\\]"):
+                tex = tex[2:-2]
+            found.append((page.relative_to(site).as_posix(), tag == "div", tex))
+    return found
+
+
+@needs_mkdocs
+def test_math_assets_are_served_by_the_site(site):
+    """KaTeX's script, stylesheet and the fonts the stylesheet names are in the built site,
+    and every page loads the script and stylesheet by a relative URL that resolves to them."""
+    katex = site / KATEX
+    for name in ("katex.min.js", "katex.min.css", "LICENSE", "PROVENANCE.txt"):
+        assert (katex / name).is_file(), f"{KATEX}/{name} is not in the site"
+    assert f"KaTeX {KATEX_VERSION}" in (katex / "PROVENANCE.txt").read_text()
+    assert f'version:"{KATEX_VERSION}"' in (katex / "katex.min.js").read_text().replace(" ", "")
+    # the stylesheet's woff2 fonts (browsers take the first format they read: woff2)
+    fonts = re.findall(r"url\((fonts/[^)]+\.woff2)\)", (katex / "katex.min.css").read_text())
+    assert len(fonts) >= 20, "katex.min.css names fewer woff2 fonts than KaTeX has"
+    missing = [f for f in fonts if not (katex / f).is_file()]
+    assert not missing, f"fonts named by katex.min.css but not in the site: {missing}"
+    for page in [site / "index.html", site / "conventions" / "index.html",
+                 site / "api" / "shading" / "index.html"]:
+        urls = _loaded_urls(page.read_text())
+        for asset in ("katex.min.js", "katex.min.css"):
+            refs = [u for u in urls if u.endswith(f"{KATEX}/{asset}")]
+            assert refs, f"{page.relative_to(site)} does not load {asset}"
+            for ref in refs:
+                assert "://" not in ref and not ref.startswith("/"), f"{ref} is not relative"
+                assert (page.parent / ref).resolve() == (katex / asset).resolve(), \
+                    f"{page.relative_to(site)}: {ref} does not lead to {KATEX}/{asset}"
+
+
+@needs_mkdocs
+def test_no_page_loads_anything_from_another_host(site):
+    """The site works offline: no script, stylesheet or icon comes from a CDN or any host."""
+    remote = {}
+    for page in _html_pages(site):
+        urls = [u for u in _loaded_urls(page.read_text())
+                if re.match(r"(?i)(https?:)?//", u)]
+        if urls:
+            remote[page.relative_to(site).as_posix()] = urls
+    assert not remote, f"pages that load from another host: {remote}"
+
+
+@needs_mkdocs
+def test_formulas_reach_the_pages_as_math(site):
+    """$...$ and $$...$$ in docs/ and the docstrings' :math: roles and .. math:: directives
+    arrive as arithmatex's spans (what katex-init.js typesets), with no Sphinx markup left."""
+    conventions = (site / "conventions" / "index.html").read_text()
+    assert '<span class="arithmatex">\\(' in conventions, "conventions.md: no inline math"
+    assert '<div class="arithmatex">\\[' in conventions, "conventions.md: no display math"
+    assert "katex-init.js" in conventions
+    # docstrings: vobscure.shading.ambient has a one-line .. math:: and two :math: roles
+    shading = (site / "api" / "shading" / "index.html").read_text()
+    assert '<div class="arithmatex">\\[\nL_o = k_A \\, c_{amb} \\otimes L_A\n\\]</div>' in shading
+    assert '<span class="arithmatex">\\(E_{ind} = \\pi L_A\\)</span>' in shading
+    for page in (site / "api").rglob("index.html"):
+        text = page.read_text()
+        assert ".. math::" not in text and ":math:`" not in text, \
+            f"{page.relative_to(site)}: Sphinx math markup left unconverted"
+
+
+@needs_mkdocs
+@pytest.mark.skipif(shutil.which("node") is None, reason="Node.js is not installed (node)")
+def test_every_formula_typesets_in_katex(site):
+    """Every formula of the site parses in the KaTeX the site serves, run in Node.js with
+    errors raised: a formula KaTeX cannot read would show as red source text in the browser."""
+    formulas = _formulas(site)
+    assert len(formulas) >= 20, "the site has fewer formulas than the pages and docstrings hold"
+    script = (
+        "const katex = require(process.argv[1]);"
+        "const items = JSON.parse(require('fs').readFileSync(0, 'utf8'));"
+        "const bad = [];"
+        "for (const [page, display, tex] of items) {"
+        "  try { katex.renderToString(tex, {displayMode: display, throwOnError: true}); }"
+        "  catch (e) { bad.push([page, tex, String(e.message)]); }"
+        "}"
+        "process.stdout.write(JSON.stringify(bad));"
+    )
+    proc = subprocess.run(
+        ["node", "-e", script, str(site / KATEX / "katex.min.js")],
+        input=json.dumps(formulas), capture_output=True, text=True, timeout=NODE_TIMEOUT,
+    )
+    assert proc.returncode == 0, proc.stderr
+    bad = json.loads(proc.stdout)
+    assert not bad, "formulas KaTeX cannot typeset:\n" + "\n".join(map(str, bad))
+
+
+def test_sphinx_math_becomes_arithmatex_markdown():
+    """mkdocs_hooks turns numpydoc math into the Markdown arithmatex reads: a :math: role on
+    one line, a directive (one-line with continuation lines, or block form) into a $$ block
+    set apart by blank lines, the text around it kept."""
+    sys.path.insert(0, str(ROOT))
+    try:
+        import mkdocs_hooks
+    finally:
+        sys.path.remove(str(ROOT))
+    role = mkdocs_hooks._MATH_ROLE.sub(mkdocs_hooks._inline_math, "with :math:`a +\n  b` here")
+    assert role == "with $a + b$ here"
+    one_line = "Text.\n.. math:: G = x, \\quad\n      a = 2\nAfter."
+    assert mkdocs_hooks._math_blocks(one_line) == "Text.\n\n$$\nG = x, \\quad\na = 2\n$$\n\nAfter."
+    block = "    Lead:\n\n    .. math::\n\n        S = 1\n            - r\n\n    Tail."
+    assert mkdocs_hooks._math_blocks(block) == "    Lead:\n\n    $$\n    S = 1\n    - r\n    $$\n\n    Tail."
