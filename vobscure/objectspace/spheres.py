@@ -165,7 +165,7 @@ def sphere_set_ao(points, normals, centers, radii, *, order: int = 4, method: st
     >>> c, r = np.array([[0.0, 0.0, 2.0]]), np.array([1.0])
     >>> v = sphere_set_ao(p, n, c, r, order=6, method="product")
     >>> round(1.0 - (1.0 / 2.0) ** 2, 4), round(float(v[0]), 4)   # exact cos(theta) (r/d)^2
-    (0.75, 0.7516)
+    (0.75, 0.7518)
     """
     points, normals = _check_receivers(points, normals)
     centers, radii = _check_spheres(centers, radii)
