@@ -8,7 +8,9 @@ Sec. 3) and :func:`scene_density` predicts its density alpha*rho (:func:`predict
 (leaves, wood) by the canopy model (Eqs. 4-6), points of the ground by the occluder model of
 the canopy's bounding sphere (Eqs. 7-8, or the ``"exact"`` / ``"porous"`` variants of
 :func:`occluder_visibility`). Both estimate sky visibility (ambient occlusion with no distance
-limit), the ``"sky"`` reference of the experiments.
+limit), the ``"sky"`` reference of the experiments. :func:`poisson_gbuffer` shades every
+pixel, leaves and ground alike, by the expected visibility of a Poisson leaf cloud in the
+same shell (:func:`poisson_visibility`), its extinction from the leaf statistics alone.
 """
 
 from __future__ import annotations
@@ -19,10 +21,11 @@ import numpy as np
 
 from .canopy import canopy_visibility, predict_density, reeves_blau
 from .occluders import occluder_visibility
+from .poisson import extinction, poisson_visibility
 from .shells import MultiShell, bounding_ellipsoid, bounding_sphere, shells_from_points
 
-__all__ = ["canopy_shell", "scene_density", "scene_extinction", "hegeman_gbuffer", "reeves_blau_gbuffer",
-           "SHELL_KINDS", "GROUND_MESH"]
+__all__ = ["canopy_shell", "scene_density", "scene_extinction", "hegeman_gbuffer", "poisson_gbuffer",
+           "reeves_blau_gbuffer", "SHELL_KINDS", "GROUND_MESH"]
 
 #: Shells :func:`canopy_shell` fits: one sphere, one ellipsoid, or k-means spheres.
 SHELL_KINDS = ("sphere", "ellipsoid", "multishell")
@@ -174,6 +177,62 @@ def scene_extinction(scene, shell) -> float:
     """
     meta = scene.metadata
     return meta["n_leaves"] / _one_shell(scene, shell).volume * meta["leaf_area"] / 2.0
+
+
+def poisson_gbuffer(gbuffer, *, scene, shell: str = "sphere", weighting: str = "cosine", k: int = 3,
+                    radius=None, normal_clamp: bool = False, thickness=None, falloff: str = "constant",
+                    seed=0) -> np.ndarray:
+    """The Poisson leaf cloud's expected sky visibility at every covered pixel of a G-buffer.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        Of ``scene``.
+    scene : Scene
+        A vegetation scene (its ``metadata`` holds ``n_leaves``, ``leaf_area`` and
+        ``canopy_points``).
+    shell : {"sphere", "ellipsoid", "multishell"}
+        The canopy shell (:func:`canopy_shell`) that the leaves are taken to fill uniformly.
+    weighting : {"cosine", "uniform"}
+        The hemisphere weight (:func:`poisson_visibility`); "cosine" is the ``"sky"``
+        reference.
+    k : int
+        Shells of ``"multishell"``.
+    radius, normal_clamp, thickness, falloff, seed
+        Accepted for the estimators' common signature and not used: the model has no radius
+        and is deterministic.
+
+    Returns
+    -------
+    (H, W) float64
+        Visibility, NaN on background.
+
+    Notes
+    -----
+    Nothing is fitted: the extinction is ``sigma = n A / 2`` with ``n = n_leaves / volume``
+    of the shell (:func:`extinction`; a multishell's volume is the sum of its shells'). Every
+    covered pixel -- leaves, wood and ground -- gets :func:`poisson_visibility` at its point
+    and normal: points inside the shell see the cloud around them, points outside it (the
+    ground) the same chord transmittance from outside. The wood is not an occluder of the
+    model.
+
+    References
+    ----------
+    Hegeman, Premoze, Ashikhmin & Drettakis, "Approximate Ambient Occlusion For Trees",
+    I3D 2006, Sec. 3 (the Poisson argument, whose expectation this evaluates exactly).
+    """
+    H, W = gbuffer.valid.shape
+    out = np.full((H, W), np.nan)
+    valid = gbuffer.valid
+    if not valid.any():
+        return out
+    canopy = canopy_shell(scene, kind=shell, k=k)
+    meta = scene.metadata
+    sigma = extinction(meta["n_leaves"], meta["leaf_area"], canopy)
+    x = np.asarray(gbuffer.world_position, dtype=np.float64)[valid]
+    n = np.asarray(gbuffer.world_normal, dtype=np.float64)[valid]
+    out[valid] = poisson_visibility(x, n, canopy, extinction=sigma, weighting=weighting)
+    return out
 
 
 def reeves_blau_gbuffer(gbuffer, *, scene, k=None, radius=None, normal_clamp: bool = False, thickness=None,
