@@ -19,7 +19,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau')
+('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -297,7 +297,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
@@ -434,3 +434,17 @@ register(Method("reeves_blau", reeves_blau_gbuffer, default_samples=1, fetch="no
                 taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
                 summary="Reeves & Blau 1985: exp(-k depth in the canopy), k the leaves' extinction; the "
                         "baseline of Hegeman et al.; vegetation scenes only"))
+
+
+def _poisson(gbuffer, **kwargs):
+    """The Poisson leaf cloud's expected sky visibility (issue 15), imported when called."""
+    from .trees.pixels import poisson_gbuffer
+
+    return poisson_gbuffer(gbuffer, **kwargs)
+
+
+register(Method("poisson", _poisson, default_samples=1, fetch="none", fetch_parameter=None,
+                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
+                summary="Poisson leaf cloud in the canopy's bounding sphere: the expected visibility "
+                        "(1/pi) int exp(-sigma L) cos, sigma = n A / 2 from the leaf statistics, nothing "
+                        "fitted; leaves and ground; vegetation scenes only"))
