@@ -49,7 +49,7 @@ __all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front",
 DEFAULT_METHODS = "point:12,point:33,line:5,line:9,area:1"
 DEFAULT_REFERENCES = ("screen", "volumetric", "ao")
 #: Added to the default methods on a vegetation scene: the models of Hegeman et al. 2006.
-VEGETATION_METHODS = "hegeman,hegeman_ellipsoid,hegeman_multishell,reeves_blau"
+VEGETATION_METHODS = "hegeman,hegeman_ellipsoid,hegeman_multishell,reeves_blau,poisson"
 #: Sizes of the default and the quick run.
 DEFAULT_SIZE = (256, 256)
 QUICK_SIZE = (64, 64)
