@@ -19,12 +19,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..groundtruth import ground_truth
+from ..groundtruth import ambient_occlusion, ground_truth
 from ..gbuffer import render_gbuffer
 from ..scenes import get as get_scene
-from ..shading import multibounce_jimenez, stewart_langer
+from ..screenspace import gtao, gtao_bent_normals
+from ..shading import LinearSky, bent_normal_lookup, multibounce_jimenez, stewart_langer
+from .common import default_radius
 
-__all__ = ["CORRECTIONS", "ALBEDOS", "BOUNCES", "Interreflections", "measure", "interreflection_rows", "main"]
+__all__ = ["CORRECTIONS", "ALBEDOS", "BOUNCES", "Interreflections", "measure", "interreflection_rows",
+           "bent_normal_rows", "verdict", "main"]
 
 #: The corrections compared: name -> f(k_A, albedo). "none" is k_A itself (black occluders).
 CORRECTIONS = {
@@ -111,6 +114,63 @@ def verdict(rows) -> str:
     return "\n".join(lines)
 
 
+#: GTAO configurations whose bent normals are compared: (slices, steps per side).
+GTAO_BENT = ((3, 3), (9, 3))
+#: The sky of the lookup comparison: brighter at the zenith, L(w) = 0.6 + 0.4 w_y.
+SKY = LinearSky(0.6, 0.4, up=(0.0, 1.0, 0.0))
+
+
+def _angles(a, b) -> np.ndarray:
+    """Angles in degrees between rows of unit vectors."""
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0)))
+
+
+def bent_normal_rows(scene: str = "cornell_box", *, radius=None, quick: bool = False, seed: int = 0,
+                     size=None, rays=None) -> list[dict]:
+    """Bent normals for the environment lookup from the ground truth and from GTAO.
+
+    The reference is the ray-traced bent normal within ``radius`` (default the scene's
+    :func:`~vobscure.experiments.common.default_radius`), with its k_A. Each row is one
+    source of (k_A, bent normal): GTAO at the slices and steps of :data:`GTAO_BENT`, or the
+    geometric normal with the ray-traced k_A (no bent normal at all). Columns: the angle to
+    the reference bent normal (median and 90th percentile, degrees, over the pixels with
+    some occlusion), and the relative difference of the sky lookup
+    (:func:`~vobscure.shading.bent_normal_lookup` of :data:`SKY`, white albedo) from the
+    lookup with the reference's k_A and bent normal (RMSE and mean), and the RMSE of the same
+    difference with the ray-traced k_A in every lookup (the normal's share alone).
+    """
+    sc = get_scene(scene)
+    size = SIZE[quick] if size is None else size
+    rays = RAYS[quick] if rays is None else rays
+    radius = default_radius(sc) if radius is None else float(radius)
+    gb = render_gbuffer(sc, sc.camera(size))
+    valid = gb.valid
+    hits = gb.hits
+    truth = ambient_occlusion(sc, hits["world_position"], hits["world_normal"], rays=rays, max_distance=radius,
+                              seed=seed, bent_normals=True)
+    occluded = truth.value < 1.0
+    target = bent_normal_lookup(truth.value, 1.0, truth.bent_normal, environment=SKY)
+    sources = {"geometric normal, ray-traced k_A": (truth.value, hits["world_normal"])}
+    for slices, steps in GTAO_BENT:
+        k = gtao(gb, radius=radius, slices=slices, steps=steps, seed=seed)[valid]
+        b = gtao_bent_normals(gb, radius=radius, slices=slices, steps=steps, seed=seed)[valid]
+        sources[f"gtao {slices}x{steps}"] = (k, gb.camera.view_to_world_dir(b))
+    rows = []
+    for name, (k, n) in sources.items():
+        n = np.asarray(n, dtype=np.float64)
+        n = n / np.linalg.norm(n, axis=1, keepdims=True)
+        angle = _angles(n, truth.bent_normal)[occluded]
+        rel = bent_normal_lookup(np.clip(k, 0.0, 1.0), 1.0, n, environment=SKY) / target - 1.0
+        # the same lookup with the ray-traced k_A: the bent normal's share of the difference
+        rel_n = bent_normal_lookup(truth.value, 1.0, n, environment=SKY) / target - 1.0
+        rows.append({"scene": scene, "source": name, "radius": radius,
+                     "angle_median_deg": float(np.median(angle)), "angle_p90_deg": float(np.percentile(angle, 90)),
+                     "lookup_rel_rmse": float(np.sqrt(np.mean(rel ** 2))), "lookup_rel_bias": float(rel.mean()),
+                     "normal_only_rel_rmse": float(np.sqrt(np.mean(rel_n ** 2))),
+                     "occluded_pixels": int(occluded.sum()), "pixels": int(valid.sum()), "rays": rays})
+    return rows
+
+
 def main(argv=None) -> int:
     """``python -m vobscure.experiments.shading [--quick]``: the table and the verdict."""
     import argparse
@@ -128,6 +188,10 @@ def main(argv=None) -> int:
                                 "k_A_mean", "ref_stderr"]))
     print()
     print(verdict(rows))
+    print()
+    bent = bent_normal_rows(quick=args.quick)
+    print(markdown_table(bent, ["scene", "source", "radius", "angle_median_deg", "angle_p90_deg",
+                                "lookup_rel_rmse", "lookup_rel_bias", "normal_only_rel_rmse", "occluded_pixels"]))
     return 0
 
 

@@ -30,12 +30,16 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "WALL_COLOURS", "SHOWN_ALBEDO"]
+__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "WALL_COLOURS", "SHOWN_ALBEDO"]
 
 #: Name of the PNG :func:`make` writes.
 FILENAME = "cornell_shading.png"
 #: Name of the CSV of the lower row's numbers.
 CSV_FILENAME = "cornell_shading.csv"
+#: Range of each numeric CSV column (the tests check every row against it).
+CSV_RANGES = {"albedo": (0.0, 1.0), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0), "max_abs": (0.0, 1.0),
+              "ref_mean": (0.0, 1.0), "k_A_mean": (0.0, 1.0), "ref_stderr": (0.0, 0.5),
+              "pixels": (1, 10 ** 7), "bounces": (1, 1000), "rays": (2, 10 ** 6)}
 #: Display colours (albedos) of the upper row: red left wall, green right wall, white rest.
 #: Chosen to look like the Cornell box, not measured reflectances.
 WALL_COLOURS = {"left_wall": (0.63, 0.07, 0.05), "right_wall": (0.14, 0.45, 0.09)}
