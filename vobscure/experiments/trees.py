@@ -45,6 +45,16 @@ Measurements
     The equal-error ray count of each model (the rays per point whose ray-cast RMSE equals
     the model's RMSE, interpolated in log-log by :func:`equal_error_rays`) and the time of
     the model relative to that ray cast, timed in one run (:func:`~vobscure.experiments.common.time_calls`).
+:func:`poisson_rows`
+    The canopy model exact in expectation (issue 15): the Poisson leaf cloud's expected
+    visibility (:func:`vobscure.trees.poisson_visibility`, extinction ``n A / 2`` from the
+    leaf count and size, nothing fitted) beside Eq. 6 with the *fitted* density, on the leaf
+    points of :func:`canopy_rows` and per pixel (foliage pixels, and the ground pixels of the
+    trees, where Hegeman's model is Eqs. 7-8), for the bounding sphere and ellipsoid; and the
+    same on uniform leaf clouds with each tree's leaf count and leaf size in its shell
+    (``tree_uniform``, ``tree_poplar_uniform``), which separates the error that clustering
+    causes from the model's own. :func:`poisson_images` holds the per-pixel images (the
+    figure ``canopy_models``).
 :func:`cost_rows`
     The paper's cost claim (Sec. 4: 460 MP/s for Hegeman's shader, 580 for Reeves-Blau's, 2300
     for ambient only, i.e. 5.0 x ambient and 1.26 x Reeves-Blau) as ratios of evaluation
@@ -73,7 +83,9 @@ __all__ = ["CANOPY_SCENES", "TREE_SCENES", "GRASS_SCENE", "REFERENCES", "PAPER_M
            "tradeoff_rows", "cost_rows", "weighting_rows", "equal_error_rays", "fit_reeves_blau",
            "canopy_images", "canopy_data", "ground_data", "grass_data", "all_rows", "CANOPY_COLUMNS",
            "GROUND_COLUMNS", "GRASS_COLUMNS",
-           "CONVERGENCE_COLUMNS", "TRADEOFF_COLUMNS", "COST_COLUMNS", "WEIGHTING_COLUMNS", "main"]
+           "CONVERGENCE_COLUMNS", "TRADEOFF_COLUMNS", "COST_COLUMNS", "WEIGHTING_COLUMNS", "main",
+           "poisson_rows", "poisson_images", "POISSON_COLUMNS", "POISSON_SCENES", "UNIFORM_TWINS",
+           "poisson_main"]
 
 #: The scenes with a canopy (registered names of :func:`vobscure.scenes.get`): the sparse and
 #: dense leaf clouds of Fig. 2 and the two trees (apple-like, poplar-like) of Figs. 3-9.
@@ -128,6 +140,18 @@ COST_COLUMNS = ("scene", "shader", "us_per_point", "vs_ambient", "vs_reeves_blau
 #: Columns of :func:`weighting_rows`.
 WEIGHTING_COLUMNS = ("scene", "what", "model", "rmse_cosine", "rmse_uniform", "better",
                      "stderr_cosine", "stderr_uniform")
+
+#: Columns of :func:`poisson_rows`.
+POISSON_COLUMNS = ("scene", "kind", "points_on", "model", "shell", "parameter", "reference", "rmse", "bias",
+                   "corr", "model_mean", "truth_mean", "truth_stderr", "points", "truth_rays")
+#: The uniform leaf clouds that stand beside the clustered trees: name -> the tree.
+UNIFORM_TWINS = {"tree_uniform": "tree", "tree_poplar_uniform": "tree_poplar"}
+#: Every scene of :func:`poisson_rows`.
+POISSON_SCENES = CANOPY_SCENES + tuple(UNIFORM_TWINS)
+#: The shells of :func:`poisson_rows`.
+POISSON_SHELLS = ("sphere", "ellipsoid")
+#: Per-pixel sizes of :func:`poisson_rows` (full, quick): image size and rays per pixel.
+POISSON_PIXELS = {False: {"size": (96, 96), "rays": 256}, True: {"size": (24, 24), "rays": 32}}
 
 #: Equal-count bins of the model's value in ``rmse_calibration`` (:func:`canopy_rows`).
 CALIBRATION_BINS = 10
@@ -470,6 +494,184 @@ def grass_data(quick: bool = False, *, seed: int = 0) -> dict:
     ``height`` (P_z / h), ``cos`` (cos theta), ``blade_height``, ``truth`` (reference ->
     Estimate), ``model`` (Eq. 9). Read only."""
     return _grass(bool(quick), int(seed))
+
+
+# ----------------------------------------------------------------------------- Poisson (issue 15)
+@lru_cache(maxsize=None)
+def _uniform_twin(name: str, seed: int):
+    """A uniform leaf cloud with the tree's leaf count and leaf size in the tree's bounding
+    sphere (the sphere rows) or, as ``(sphere twin, ellipsoid twin)``, in its crown ellipsoid
+    (``canopy_radii``, axis-aligned, the ellipsoid rows)."""
+    from .. import scenes
+    from .. import trees as T
+
+    tree = _scene(UNIFORM_TWINS[name])
+    md = tree.metadata
+    n, size = int(md["n_leaves"]), float(md["parameters"]["leaf_size"])
+    R = float(T.bounding_sphere(np.asarray(md["canopy_points"], dtype=np.float64)).radius)
+    sphere = scenes.leaf_cloud(n, radii=R, leaf_size=size, seed=seed + 100, name=name)
+    ellipsoid = scenes.leaf_cloud(n, shape="ellipsoid", radii=tuple(md["canopy_radii"]), leaf_size=size,
+                                  seed=seed + 200, name=f"{name} (ellipsoid)")
+    return sphere, ellipsoid
+
+
+@lru_cache(maxsize=None)
+def _poisson_leaves(name: str, shell_label: str, quick: bool, seed: int) -> dict:
+    """Leaf points, their truth and both models for one scene and shell (scored half)."""
+    from .. import trees as T
+    from ..scenes import leaf_points
+
+    s = setting(quick)
+    if name in CANOPY_SCENES:
+        d = _canopy(name, quick, seed)
+        scene, points, normals, fit, score, truth = (d["scene"], d["points"], d["normals"], d["fit"], d["score"],
+                                                     d["truth"])
+        shell = d["shells"][shell_label][0]
+        fitted = {c["reference"]: (c["parameter"], c["values"]) for c in d["configs"]
+                  if c["model"] == "hegeman" and c["shell"] == shell_label and c["source"] == "fitted"}
+    else:
+        scene = _uniform_twin(name, seed)[0 if shell_label == "sphere" else 1]
+        points, normals = leaf_points(scene, s["points"], seed=seed)
+        fit, score = np.arange(0, len(points), 2), np.arange(1, len(points), 2)
+        truth = {w: _truth(scene, points, normals, w, s["truth_rays"], seed + 1 + i)
+                 for i, w in enumerate(REFERENCES)}
+        cp = np.asarray(scene.metadata["canopy_points"], dtype=np.float64)
+        shell = T.bounding_sphere(cp) if shell_label == "sphere" else T.bounding_ellipsoid(cp)
+        fitted = {}
+        for w in REFERENCES:
+            rho, _ = _fit_density_checked(points[fit], normals[fit], shell, truth[w].value[fit])
+            fitted[w] = (rho, T.canopy_visibility(points[score], normals[score], shell, density=rho))
+    md = scene.metadata
+    sigma = T.extinction(md["n_leaves"], md["leaf_area"], shell)
+    poisson = {w: T.poisson_visibility(points[score], normals[score], shell, extinction=sigma, weighting=w)
+               for w in REFERENCES}
+    return {"scene": scene, "shell": shell, "sigma": sigma, "fitted": fitted, "poisson": poisson,
+            "truth": {w: _sub(truth[w], score) for w in REFERENCES}, "truth_rays": s["truth_rays"]}
+
+
+@lru_cache(maxsize=None)
+def _poisson_pixels(name: str, shell_label: str, quick: bool, seed: int) -> dict:
+    """Per-pixel truth (both weightings) and both models on one scene's view."""
+    from .. import trees as T
+    from ..camera import Camera
+    from ..gbuffer import render_gbuffer
+
+    px = POISSON_PIXELS[bool(quick)]
+    leaves = _poisson_leaves(name, shell_label, quick, seed)
+    scene, shell, sigma = leaves["scene"], leaves["shell"], leaves["sigma"]
+    v = scene.view
+    kw = {"fov_y": v["fov_y"]} if "fov_y" in v else {"ortho_height": v["ortho_height"]}
+    cam = Camera.look_at(v["eye"], v["target"], up=v.get("up", (0, 1, 0)), size=tuple(px["size"]), **kw)
+    gb = render_gbuffer(scene, cam)
+    valid = np.asarray(gb.valid)
+    H, W = valid.shape
+    pos = np.asarray(gb.world_position, dtype=np.float64)[valid]
+    nrm = np.asarray(gb.world_normal, dtype=np.float64)[valid]
+    names = list(scene.meshes)
+    mesh = np.asarray(scene.mesh_index)[np.asarray(gb.primitive)[valid]]
+    foliage = mesh == names.index(scene.metadata["foliage_mesh"])
+    ground = (mesh == names.index("ground")) if "ground" in names else np.zeros(len(pos), bool)
+    use = foliage | ground
+    idx = np.flatnonzero(valid.ravel())[use]
+    pos, nrm, foliage, ground = pos[use], nrm[use], foliage[use], ground[use]
+
+    def image(values):
+        out = np.full(H * W, np.nan)
+        out[idx] = values
+        return out.reshape(H, W)
+
+    truth, hegeman, poisson = {}, {}, {}
+    sphere = T.bounding_sphere(np.asarray(scene.metadata["canopy_points"], dtype=np.float64))
+    for i, w in enumerate(REFERENCES):
+        truth[w] = _truth(scene, pos, nrm, w, px["rays"], seed + 31 + i)
+        rho = leaves["fitted"][w][0]
+        h = np.empty(len(pos))
+        h[foliage] = T.canopy_visibility(pos[foliage], nrm[foliage], shell, density=rho)      # Eqs. 4-6
+        if ground.any():                                                                     # Eqs. 7-8
+            h[ground] = T.occluder_visibility(pos[ground], nrm[ground], sphere, model="hegeman")
+        hegeman[w] = h
+        poisson[w] = T.poisson_visibility(pos, nrm, shell, extinction=sigma, weighting=w)
+    return {"foliage": foliage, "ground": ground, "truth": truth, "hegeman": hegeman, "poisson": poisson,
+            "image": image, "rays": px["rays"], "size": (H, W)}
+
+
+def poisson_rows(quick: bool = False, *, seed: int = 0, scenes=POISSON_SCENES) -> list[dict]:
+    """The Poisson leaf cloud's expected visibility, predicted, beside Eq. 6 with the fitted
+    density, against the ray-cast sky visibility.
+
+    One row per (scene, points_on, model, shell, reference); columns
+    :data:`POISSON_COLUMNS`. ``points_on``: ``"leaves"`` (the scored half of the leaf points
+    of :func:`canopy_rows`; for the uniform twins their own leaf points), ``"foliage pixels"``
+    and ``"ground pixels"`` (trees only; Hegeman's model there is Eqs. 7-8 of the bounding
+    sphere) of the scene's view at :data:`POISSON_PIXELS`. ``model``: ``"hegeman fitted"``
+    (``parameter`` = alpha rho fitted on the fit half of the leaf points to that reference)
+    or ``"poisson predicted"`` (``parameter`` = sigma = n A / 2 from the leaf statistics,
+    nothing fitted). ``truth_stderr`` is the reference's RMS standard error (its noise floor).
+    The scenes ``tree_uniform`` and ``tree_poplar_uniform`` (:data:`UNIFORM_TWINS`) are
+    uniform leaf clouds with each tree's leaf count and leaf size, in its bounding sphere (the
+    sphere rows) or its crown ellipsoid (the ellipsoid rows): the Poisson model's error there
+    is its own, the difference on the tree is the clustering's.
+    """
+    rows = []
+    for name in scenes:
+        for label in POISSON_SHELLS:
+            lv = _poisson_leaves(name, label, bool(quick), int(seed))
+            kind = lv["scene"].metadata.get("kind", "")
+            pix = _poisson_pixels(name, label, bool(quick), int(seed))
+            for w in REFERENCES:
+                rho, hv = lv["fitted"][w]
+                groups = [("leaves", hv, lv["poisson"][w], lv["truth"][w], lv["truth_rays"])]
+                for where, mask in (("foliage pixels", pix["foliage"]), ("ground pixels", pix["ground"])):
+                    if mask.any():
+                        idx = np.flatnonzero(mask)
+                        groups.append((where, pix["hegeman"][w][idx], pix["poisson"][w][idx],
+                                       _sub(pix["truth"][w], idx), pix["rays"]))
+                for where, h, p, truth, rays in groups:
+                    for model, values, param in (("hegeman fitted", h, rho), ("poisson predicted", p, lv["sigma"])):
+                        sc = _scores(values, truth)
+                        del sc["mae"]
+                        rows.append({"scene": name, "kind": kind, "points_on": where, "model": model,
+                                     "shell": label, "parameter": float(param), "reference": w, **sc,
+                                     "truth_rays": int(rays)})
+    return rows
+
+
+def poisson_images(name: str, *, shell: str = "sphere", reference: str = "cosine", quick: bool = False,
+                   seed: int = 0) -> dict:
+    """The per-pixel images behind :func:`poisson_rows` (the figure ``canopy_models``):
+    ``truth``, ``stderr``, ``hegeman`` (Eq. 6 fitted; Eqs. 7-8 on the ground), ``poisson``
+    (predicted), each (H, W) with NaN where no foliage or ground is seen, and the parameters
+    ``density`` and ``sigma``."""
+    lv = _poisson_leaves(str(name), shell, bool(quick), int(seed))
+    pix = _poisson_pixels(str(name), shell, bool(quick), int(seed))
+    img = pix["image"]
+    t = pix["truth"][reference]
+    return {"truth": img(np.asarray(t.value)), "stderr": img(np.asarray(t.stderr)),
+            "hegeman": img(pix["hegeman"][reference]), "poisson": img(pix["poisson"][reference]),
+            "density": float(lv["fitted"][reference][0]), "sigma": float(lv["sigma"]), "rays": pix["rays"]}
+
+
+def poisson_main(argv=None) -> int:
+    """``python -c "from vobscure.experiments.trees import poisson_main; poisson_main()" [--quick]``:
+    :func:`poisson_rows` as a Markdown table (and a CSV with ``--out``)."""
+    import argparse
+    import time
+    from pathlib import Path
+
+    from .common import machine, markdown_table, write_csv
+
+    ap = argparse.ArgumentParser(prog="vobscure.experiments.trees.poisson_main")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    rows = poisson_rows(args.quick, seed=args.seed)
+    print(markdown_table(rows, POISSON_COLUMNS))
+    print(f"\n{time.perf_counter() - t0:.1f} s, machine {machine()}")
+    if args.out:
+        write_csv(Path(args.out) / "trees_poisson.csv", rows, POISSON_COLUMNS, digits=6)
+    return 0
 
 
 # ----------------------------------------------------------------------------- ground (Fig. 9)
