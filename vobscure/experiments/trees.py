@@ -652,8 +652,8 @@ def poisson_images(name: str, *, shell: str = "sphere", reference: str = "cosine
 
 
 def poisson_main(argv=None) -> int:
-    """``python -c "from vobscure.experiments.trees import poisson_main; poisson_main()" [--quick]``:
-    :func:`poisson_rows` as a Markdown table (and a CSV with ``--out``)."""
+    """:func:`poisson_rows` as a Markdown table (and ``trees_poisson.csv`` with ``--out``): what
+    ``python -m vobscure.experiments.trees --poisson [--quick] [--seed N] [--out DIR]`` runs."""
     import argparse
     import time
     from pathlib import Path
@@ -1108,8 +1108,8 @@ _TABLE_COLUMNS = {"canopy": CANOPY_COLUMNS, "ground": GROUND_COLUMNS, "grass": G
 
 
 def main(argv=None) -> int:
-    """``python -m vobscure.experiments.trees [--quick] [--seed N] [--out DIR]``: run every
-    measurement, print Markdown tables (and, with ``--out``, write one CSV per table and a
+    """``python -m vobscure.experiments.trees [--quick] [--seed N] [--out DIR] [--poisson]``: run
+    every measurement (with ``--poisson`` only :func:`poisson_rows`), print Markdown tables (and, with ``--out``, write one CSV per table and a
     ``trees.json`` with the machine record)."""
     import argparse
     import time
@@ -1121,7 +1121,12 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="small and fast (what CI runs)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=None, help="directory for the CSV tables and trees.json")
+    ap.add_argument("--poisson", action="store_true",
+                    help="only the Poisson leaf cloud against Eq. 6 (poisson_rows; trees_poisson.csv)")
     args = ap.parse_args(argv)
+    if args.poisson:
+        return poisson_main([*(["--quick"] if args.quick else []), "--seed", str(args.seed),
+                             *(["--out", args.out] if args.out else [])])
     t0 = time.perf_counter()
     tables = all_rows(args.quick, seed=args.seed)
     elapsed = time.perf_counter() - t0
