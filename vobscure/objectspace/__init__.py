@@ -2,13 +2,23 @@
 G-buffer or rays.
 
 - :mod:`vobscure.objectspace.disks`: Bunnell 2005, the surface as oriented disks
-  (RTR 3rd ed. Sec. 9.2.5).
+  (RTR 3rd ed. Sec. 9.2.5), per vertex (:func:`bunnell`) and per pixel
+  (:func:`bunnell_gbuffer`).
 
 Everything public is importable from here: ``from vobscure.objectspace import bunnell``.
 """
 
 from __future__ import annotations
 
-from .disks import bunnell, disk_shadow, vertex_disks
+from .disks import (
+    DEFAULT_TERM,
+    TERMS,
+    bunnell,
+    bunnell_gbuffer,
+    disk_shadow,
+    shadow_evaluations,
+    vertex_disks,
+)
 
-__all__ = ["bunnell", "disk_shadow", "vertex_disks"]
+__all__ = ["DEFAULT_TERM", "TERMS", "bunnell", "bunnell_gbuffer", "disk_shadow", "shadow_evaluations",
+           "vertex_disks"]

@@ -2,13 +2,20 @@ r"""Object-space ambient occlusion from oriented disks (Bunnell 2005).
 
 The surface is replaced by one oriented disk per mesh vertex (area a third of the adjacent
 triangles' areas, normal the vertex normal), and each disk's occlusion of a receiver is
-computed in closed form, without rays (Bunnell 2005; RTR 3rd ed. Sec. 9.2.5). Summing all
-disks' shadows double-counts a disk hidden behind another; Bunnell's second pass weights each
-emitter by its own first-pass accessibility, which cancels most of that over-darkening.
+computed in closed form, without rays (Bunnell 2005, Sec. 14.1-14.2; RTR 3rd ed. Sec.
+9.2.5). Summing all disks' shadows double-counts a disk hidden behind another; Bunnell's
+second pass weights each emitter by its own first-pass accessibility, which cancels most of
+that over-darkening.
 
 The exact form is O(n^2): blocks of receivers against every emitter. ``hierarchy=True``
-uses a binary tree of aggregated disks instead (RTR 9.2.5): a node far from the receiver
-(farther than ``open_ratio`` times its bounding radius) stands for all its disks.
+(the default) uses a binary tree of aggregated disks instead (RTR 9.2.5): a node far from
+the receiver (farther than ``open_ratio`` times its bounding radius) stands for all its
+disks, which makes a pass O(n log n).
+
+Three shadow terms are offered (:data:`TERMS`, :func:`disk_shadow`): the on-axis
+solid-angle fraction of the disk with clamped cosines, the form of the chapter's Listing
+14-1, and the cosine-weighted point-to-disk form factor. ``docs/objectspace.md`` measures
+each against ray-cast AO.
 
 References
 ----------
@@ -20,12 +27,26 @@ References
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
+import trimesh
 
-from .._validate import as_array, as_points, as_unit_vectors, check_int, check_positive
-from ..scenes import as_scene
+from .._validate import as_array, as_points, as_unit_vectors, check_choice, check_int, check_positive
+from ..scenes import Scene, as_scene
 
-__all__ = ["bunnell", "disk_shadow", "vertex_disks"]
+__all__ = ["TERMS", "DEFAULT_TERM", "bunnell", "bunnell_gbuffer", "disk_shadow", "shadow_evaluations",
+           "vertex_disks"]
+
+#: The shadow terms of :func:`disk_shadow`.
+TERMS = ("solid_angle", "gpugems", "form_factor")
+
+#: The default term of :func:`bunnell` (chosen by the measurements of ``docs/objectspace.md``).
+DEFAULT_TERM = "gpugems"
+
+#: Listing 14-1's receiver factor ``saturate(4 dot(receiverNormal, v))``: full weight from
+#: 14.5 degrees above the receiver's tangent plane up.
+GPUGEMS_RECEIVER_GAIN = 4.0
 
 #: Receivers evaluated at once against all emitters (memory: BLOCK * n_emitters * 3 floats).
 DEFAULT_BLOCK = 512
@@ -34,20 +55,47 @@ DEFAULT_BLOCK = 512
 #: receiver's own disk and casts no shadow (the term is undefined at zero distance).
 SELF_DISTANCE = 1e-9
 
+#: A tree node farther from the receiver than this many times its bounding radius is used
+#: as one aggregated disk (``hierarchy=True``).
+DEFAULT_OPEN_RATIO = 4.0
 
-def disk_shadow(receivers, receiver_normals, emitters, emitter_normals, emitter_areas):
-    r"""Bunnell's shadow term of every emitter disk on every receiver point.
+#: ``max_edge="auto"``: this fraction of the diagonal of the scene's bounding box.
+AUTO_EDGE_FRACTION = 1.0 / 32.0
 
-    .. math::
+#: :func:`vertex_disks` refuses a ``max_edge`` that would make more triangles than this.
+MAX_SUBDIVIDED_FACES = 2_000_000
 
-        S = \left(1 - \frac{1}{\sqrt{1 + A / (\pi r^2)}}\right)
-            \max(0, -\mathbf{e}\cdot\mathbf{n}_E)\,\max(0, \mathbf{e}\cdot\mathbf{n}_R)
 
-    with :math:`\mathbf{e}` the unit vector from the receiver to the emitter, r their
-    distance, A the emitter's area. The first factor is the fraction of the hemisphere's
-    solid angle that a disk of area A seen on axis at distance r subtends,
-    :math:`1 - r/\sqrt{r^2 + a^2}` for :math:`A = \pi a^2`; the cosines tilt it away from
-    the axis. The emitter must face the receiver, and lie above the receiver's plane.
+# ----------------------------------------------------------------------------- the term
+
+
+def disk_shadow(receivers, receiver_normals, emitters, emitter_normals, emitter_areas, *,
+                term: str = DEFAULT_TERM):
+    r"""The shadow of every emitter disk on every receiver point.
+
+    With :math:`\mathbf{e}` the unit vector from the receiver to the emitter, r their
+    distance, A the emitter's area, :math:`\cos\theta_E = -\mathbf{e}\cdot\mathbf{n}_E`
+    (positive when the emitter's front faces the receiver) and
+    :math:`\cos\theta_R = \mathbf{e}\cdot\mathbf{n}_R`:
+
+    ``"solid_angle"``
+        :math:`S = \left(1 - 1/\sqrt{1 + A/(\pi r^2)}\right)\max(0, \cos\theta_E)
+        \max(0, \cos\theta_R)`. The first factor is the fraction of the hemisphere's solid
+        angle that a disk of area :math:`A = \pi a^2` subtends on axis,
+        :math:`1 - r/\sqrt{r^2 + a^2}`; it is the on-axis occlusion of *uniformly* weighted
+        AO.
+    ``"gpugems"``
+        :math:`S = \left(1 - 1/\sqrt{1 + A/(\pi r^2)}\right)\max(0, -\cos\theta_E)
+        \,\mathrm{clamp}(4\cos\theta_R, 0, 1)`: Bunnell's Listing 14-1 (the same axis
+        factor, the area "already divided by pi"). Two differences from ``"solid_angle"``:
+        the receiver cosine is strengthened and saturates at 1 from 14.5 degrees up, and
+        the emitter casts its shadow *from its back* (Sec. 14.1: "shadows are cast from
+        the back"), so on a closed mesh the far side of an occluder shadows the receiver.
+    ``"form_factor"``
+        :math:`S = A\max(0, \cos\theta_E)\max(0, \cos\theta_R) / (\pi r^2 + A)`: the
+        point-to-disk form factor on axis, :math:`a^2/(r^2 + a^2)`, with the cosines; the
+        on-axis occlusion of *cosine*-weighted AO (RTR Eq. 9.14). Twice the solid-angle
+        term for a small disk.
 
     Parameters
     ----------
@@ -60,45 +108,55 @@ def disk_shadow(receivers, receiver_normals, emitters, emitter_normals, emitter_
         Unit disk normals (renormalized); the disk's front side is the one they point to.
     emitter_areas : (k,) float
         Disk areas, >= 0.
+    term : {"solid_angle", "gpugems", "form_factor"}
+        The form above.
 
     Returns
     -------
     (n, k) float64
         The shadow of emitter j on receiver i, in [0, 1); 0 where the two coincide.
 
-    Notes
-    -----
-    On axis this is the hemisphere's solid-angle fraction (the occlusion of *uniformly*
-    weighted AO) exactly; the cosine-weighted occlusion of the same disk is its form factor
-    :math:`a^2/(r^2 + a^2)`, twice as large for a small disk (see ``docs/objectspace.md``).
-
     References
     ----------
-    Bunnell 2005 (GPU Gems 2, ch. 14), the element-to-element shadow approximation; RTR 3rd
-    ed. Sec. 9.2.5.
+    Bunnell 2005 (GPU Gems 2, ch. 14), Sec. 14.2, Listing 14-1 (the element-to-element
+    shadow); RTR 3rd ed. Sec. 9.2.5; the disk form factor: RTR Eq. 9.14 integrated over a
+    disk seen on axis.
 
     Examples
     --------
     >>> import numpy as np
-    >>> S = disk_shadow([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 1]], [[0, 0, -1]], [np.pi])
+    >>> S = disk_shadow([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 1]], [[0, 0, -1]], [np.pi],
+    ...                 term="solid_angle")
     >>> round(float(S[0, 0]), 6)  # a unit-radius disk at distance 1: 1 - 1/sqrt(2)
     0.292893
+    >>> float(disk_shadow([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 1]], [[0, 0, -1]], [np.pi])[0, 0])
+    0.5
     """
+    term = check_choice(term, "term", TERMS)
     p_R = as_points(receivers, "receivers")
     n_R = as_unit_vectors(receiver_normals, "receiver_normals", count=len(p_R))
     p_E = as_points(emitters, "emitters")
     n_E = as_unit_vectors(emitter_normals, "emitter_normals", count=len(p_E))
     A = _as_areas(emitter_areas, len(p_E))
-    return _shadow(p_R, n_R, p_E, n_E, A, _self_distance(p_R, p_E))
+    return _shadow(p_R, n_R, p_E, n_E, A, _self_distance(p_R, p_E), term)
 
 
-def vertex_disks(scene):
+# ----------------------------------------------------------------------------- the disks
+
+
+def vertex_disks(scene, *, max_edge=None):
     """The disks Bunnell places at the vertices of every mesh of ``scene``.
 
     Parameters
     ----------
     scene : Scene, trimesh.Trimesh, str or os.PathLike
         Anything :func:`vobscure.scenes.as_scene` accepts.
+    max_edge : float, "auto" or None
+        Subdivide every mesh first until no edge is longer than this (in the scene's units;
+        ``trimesh.remesh.subdivide_to_size``, each long triangle split in four), so that a
+        coarse mesh (a box wall of 8 vertices) becomes a surface of many disks. ``"auto"``:
+        :data:`AUTO_EDGE_FRACTION` of the diagonal of the scene's bounding box. None: the
+        meshes as they are.
 
     Returns
     -------
@@ -107,7 +165,8 @@ def vertex_disks(scene):
     normals : (k, 3) float64
         Unit vertex normals (trimesh's face-area weighted means).
     areas : (k,) float64
-        A third of the area of the triangles around each vertex (they sum to the surface area).
+        A third of the area of the triangles around each vertex (Bunnell 2005, Sec. 14.1;
+        they sum to the surface area).
 
     Examples
     --------
@@ -115,34 +174,42 @@ def vertex_disks(scene):
     >>> c, n, A = vertex_disks(trimesh.creation.box())
     >>> c.shape, round(float(A.sum()), 6)
     ((8, 3), 6.0)
+    >>> c, n, A = vertex_disks(trimesh.creation.box(), max_edge=0.3)
+    >>> len(c) > 8, round(float(A.sum()), 6)
+    (True, 6.0)
     """
     scene = as_scene(scene)
+    max_edge = _resolve_max_edge(scene, max_edge)
     centres, normals, areas = [], [], []
     for mesh in scene.meshes.values():
+        if max_edge is not None:
+            mesh = _subdivided(mesh, max_edge)
         faces = np.asarray(mesh.faces)
         A_face = np.asarray(mesh.area_faces, dtype=np.float64)
         centres.append(np.asarray(mesh.vertices, dtype=np.float64))
         normals.append(np.asarray(mesh.vertex_normals, dtype=np.float64))
-        # each triangle gives a third of its area to each of its corners
+        # Bunnell 2005, Sec. 14.1: each triangle gives a third of its area to each corner
         areas.append(np.bincount(faces.ravel(), weights=np.repeat(A_face / 3.0, 3),
                                  minlength=len(mesh.vertices)))
+    if not centres:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
     return np.concatenate(centres), np.concatenate(normals), np.concatenate(areas)
 
 
-#: A tree node farther from the receiver than this many times its bounding radius is used
-#: as one aggregated disk (``hierarchy=True``).
-DEFAULT_OPEN_RATIO = 4.0
+# ----------------------------------------------------------------------------- the passes
 
 
-def bunnell(scene, points=None, normals=None, *, passes: int = 2, hierarchy: bool = False,
-            block: int = DEFAULT_BLOCK, open_ratio: float = DEFAULT_OPEN_RATIO) -> np.ndarray:
+def bunnell(scene, points=None, normals=None, *, passes: int = 2, term: str = DEFAULT_TERM,
+            average: bool = False, hierarchy: bool = True, max_edge=None, block: int = DEFAULT_BLOCK,
+            open_ratio: float = DEFAULT_OPEN_RATIO) -> np.ndarray:
     r"""Ambient visibility from Bunnell's disks (1 = open).
 
     Pass 1 sums the shadows of all disks, double shadowing included:
     :math:`V_1(i) = 1 - \sum_j S_{ij}`. Pass p > 1 weights each emitter by its accessibility
-    from the previous pass, :math:`V_p(i) = 1 - \sum_j S_{ij} V_{p-1}(j)` (Bunnell 2005):
-    a disk that is itself in shadow is mostly hidden behind the disk that shadows it. Each
-    pass is clamped to [0, 1].
+    from the previous pass, :math:`V_p(i) = 1 - \sum_j S_{ij} V_{p-1}(j)` (Bunnell 2005,
+    Sec. 14.2): a disk that is itself in shadow is mostly hidden behind the disk that
+    shadows it. Each pass is clamped to [0, 1]. With ``average``, the result is the mean of
+    the last two passes, :math:`(V_{p-1} + V_p)/2`.
 
     Parameters
     ----------
@@ -156,29 +223,38 @@ def bunnell(scene, points=None, normals=None, *, passes: int = 2, hierarchy: boo
     normals : (n, 3) float, optional
         Receiver normals; required with ``points``, not allowed without.
     passes : int
-        Number of passes, >= 1. Bunnell uses 2 (a third averages the second and third
-        passes in his chapter; here a third pass is simply one more iteration).
+        Number of passes, >= 1 (Bunnell: 2).
+    term : {"solid_angle", "gpugems", "form_factor"}
+        The shadow term (:func:`disk_shadow`); default :data:`DEFAULT_TERM`.
+    average : bool
+        Return the mean of the last two passes (needs ``passes >= 2``): a pass over-darkens
+        where the one after under-darkens, and the mean of two consecutive passes is
+        closer to the fixed point than either (the remedy that ports of the chapter apply
+        after the second pass).
     hierarchy : bool
         Use the tree of aggregated disks (RTR 9.2.5; Bunnell 2005): a binary tree by median
         splits of the disk centres, each node one disk with the sum of its disks' areas,
         their area-weighted mean centre and normal, and (in passes > 1) their area-weighted
-        mean accessibility. False: the exact sum over all disks.
+        mean accessibility. False: the exact O(n^2) sum over all disks.
+    max_edge : float, "auto" or None
+        Subdivide the meshes first (:func:`vertex_disks`).
     block : int
         Receivers evaluated at once (memory ``block * k`` floats per array); exact sum only.
     open_ratio : float
         With ``hierarchy``: a node is used as one disk when the receiver is farther from
         its centre than ``open_ratio`` times its bounding radius; else its children are.
-        Large values reproduce the exact sum.
+        ``np.inf`` reproduces the exact sum.
 
     Returns
     -------
     (n,) float64
-        Visibility in [0, 1]: per vertex when ``points`` is None, else per point.
+        Visibility in [0, 1]: per vertex (of the subdivided meshes with ``max_edge``) when
+        ``points`` is None, else per point.
 
     References
     ----------
-    Bunnell 2005, GPU Gems 2, ch. 14; RTR 3rd ed. Sec. 9.2.5. The shadow term is
-    :func:`disk_shadow`.
+    Bunnell 2005, GPU Gems 2, ch. 14, Sec. 14.2; RTR 3rd ed. Sec. 9.2.5. The shadow terms
+    are :func:`disk_shadow`'s.
 
     Examples
     --------
@@ -187,43 +263,213 @@ def bunnell(scene, points=None, normals=None, *, passes: int = 2, hierarchy: boo
     >>> V.shape, bool(((0 <= V) & (V <= 1)).all())
     ((12,), True)
     """
-    if not isinstance(hierarchy, (bool, np.bool_)):
-        raise ValueError(f"hierarchy must be True or False, got {hierarchy!r}")
-    passes = check_int(passes, "passes", minimum=1)
-    block = check_int(block, "block", minimum=1)
-    open_ratio = check_positive(open_ratio, "open_ratio", allow_inf=True)
-    p_E, n_E, A = vertex_disks(scene)
+    opts = _options(passes, term, average, hierarchy, block, open_ratio)
+    cache = isinstance(scene, Scene)
+    scene = as_scene(scene)
     if points is None:
         if normals is not None:
             raise ValueError("normals were given without points; pass both, or neither for "
                              "the per-vertex visibility")
-        p_R, n_R = p_E, n_E
     else:
         if normals is None:
             raise ValueError("normals is required when points is given")
-        p_R = as_points(points, "points")
-        n_R = as_unit_vectors(normals, "normals", count=len(p_R))
-    eps = _self_distance(p_R, p_E)
+        points = as_points(points, "points")
+        normals = as_unit_vectors(normals, "normals", count=len(points))
+    return _state(scene, max_edge, opts, cache).evaluate(points, normals, passes=opts[0])
 
-    # Pass 1: every emitter at full weight (double shadowing); passes 2..: weighted by the
-    # emitters' own accessibility from the pass before (Bunnell 2005).
-    if hierarchy:
-        tree = _Tree(p_E, n_E, A)
 
-        def gather(p, n, V):
-            return _gather_tree(p, n, tree, V, open_ratio, eps)
-    else:
-        def gather(p, n, V):
-            return _gather(p, n, p_E, n_E, A, V, block, eps)
-    V_E = np.ones(len(p_E))
-    for _ in range(passes - 1):
-        V_E = gather(p_E, n_E, V_E)
+def bunnell_gbuffer(gbuffer, *, scene, passes: int = 2, term: str = DEFAULT_TERM, average: bool = False,
+                    hierarchy: bool = True, max_edge=None, open_ratio: float = DEFAULT_OPEN_RATIO,
+                    block: int = DEFAULT_BLOCK, radius=None, normal_clamp: bool = False, thickness=None,
+                    falloff: str = "constant", seed=0) -> np.ndarray:
+    """Bunnell's disk AO at every covered pixel of a G-buffer.
+
+    The receivers are the pixels' world positions and normals (``gbuffer.world_position``,
+    ``gbuffer.world_normal`` where ``gbuffer.valid``); the emitters are the scene's disks
+    with their accessibilities from the per-vertex passes. Those passes depend only on the
+    scene and the options, so they are computed once per scene object and options and kept
+    while the scene lives (a sample sweep calls this many times for one scene).
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        Of ``scene``.
+    scene : Scene
+        The scene the G-buffer shows.
+    passes, term, average, hierarchy, max_edge, open_ratio, block
+        As for :func:`bunnell`.
+    radius, normal_clamp, thickness, falloff, seed
+        Accepted for the estimators' common signature and not used: the disks' AO has no
+        radius (it estimates the visibility of the whole sky) and is deterministic.
+
+    Returns
+    -------
+    (H, W) float64
+        Visibility in [0, 1], NaN on background.
+
+    References
+    ----------
+    Bunnell 2005, GPU Gems 2, ch. 14; RTR 3rd ed. Sec. 9.2.5.
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> scene = vo.scenes.get("crease")
+    >>> cam = vo.Camera.look_at((1, 1, 2), (0, 0, 0), size=(8, 6), fov_y=50.0)
+    >>> V = bunnell_gbuffer(vo.render_gbuffer(scene, cam), scene=scene)
+    >>> V.shape, bool((V[~np.isnan(V)] <= 1).all())
+    ((6, 8), True)
+    """
+    opts = _options(passes, term, average, hierarchy, block, open_ratio)
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a vobscure Scene (the one the G-buffer shows), got "
+                         f"{type(scene).__name__}")
+    valid = np.asarray(gbuffer.valid)
+    out = np.full(valid.shape, np.nan)
+    if not valid.any():
+        return out
+    x = as_points(np.asarray(gbuffer.world_position, dtype=np.float64)[valid], "gbuffer.world_position")
+    n = as_unit_vectors(np.asarray(gbuffer.world_normal, dtype=np.float64)[valid], "gbuffer.world_normal",
+                        count=len(x))
+    out[valid] = _state(scene, max_edge, opts, True).evaluate(x, n, passes=opts[0])
+    return out
+
+
+def shadow_evaluations(scene, points=None, normals=None, *, hierarchy: bool = True, max_edge=None,
+                       open_ratio: float = DEFAULT_OPEN_RATIO) -> int:
+    """The number of shadow terms one pass of :func:`bunnell` evaluates (its cost).
+
+    The exact sum evaluates every (receiver, disk) pair; the tree evaluates one term per
+    (receiver, node) pair it uses, leaves included.
+
+    Parameters
+    ----------
+    scene, points, normals, hierarchy, max_edge, open_ratio
+        As for :func:`bunnell`.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> sphere = trimesh.creation.icosphere(subdivisions=2)
+    >>> shadow_evaluations(sphere, hierarchy=False) == len(sphere.vertices) ** 2
+    True
+    >>> shadow_evaluations(sphere) < len(sphere.vertices) ** 2
+    True
+    """
+    if not isinstance(hierarchy, (bool, np.bool_)):
+        raise ValueError(f"hierarchy must be True or False, got {hierarchy!r}")
+    open_ratio = check_positive(open_ratio, "open_ratio", allow_inf=True)
+    scene = as_scene(scene)
+    p_E, n_E, A = vertex_disks(scene, max_edge=max_edge)
     if points is None:
-        return gather(p_E, n_E, V_E)
-    return gather(p_R, n_R, V_E)
+        p_R = p_E
+    else:
+        p_R = as_points(points, "points")
+        if normals is None:
+            raise ValueError("normals is required when points is given")
+        as_unit_vectors(normals, "normals", count=len(p_R))
+    if not hierarchy:
+        return len(p_R) * len(p_E)
+    return _traverse(p_R, _Tree(p_E, n_E, A), open_ratio, None)[0]
 
 
 # ----------------------------------------------------------------------------- helpers
+
+
+_STATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _options(passes, term, average, hierarchy, block, open_ratio) -> tuple:
+    """Validated (passes, term, average, hierarchy, block, open_ratio)."""
+    passes = check_int(passes, "passes", minimum=1)
+    term = check_choice(term, "term", TERMS)
+    for name, value in (("average", average), ("hierarchy", hierarchy)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"{name} must be True or False, got {value!r}")
+    if average and passes < 2:
+        raise ValueError("average needs passes >= 2 (it is the mean of the last two passes)")
+    block = check_int(block, "block", minimum=1)
+    open_ratio = check_positive(open_ratio, "open_ratio", allow_inf=True)
+    return passes, term, bool(average), bool(hierarchy), block, open_ratio
+
+
+def _state(scene, max_edge, opts, cache: bool) -> "_State":
+    """The scene's disks, tree and passes for these options; with ``cache``, made once per
+    Scene object and options and kept while the scene lives (the method's precomputation)."""
+    max_edge = _resolve_max_edge(scene, max_edge)
+    if not cache:
+        return _State(scene, max_edge, opts)
+    per_scene = _STATES.setdefault(scene, {})
+    key = (max_edge,) + opts[1:]           # every option but the number of passes
+    if key not in per_scene:
+        per_scene[key] = _State(scene, max_edge, opts)
+    return per_scene[key]
+
+
+class _State:
+    """A scene's disks, their tree and their accessibility after each pass (grown on demand)."""
+
+    def __init__(self, scene, max_edge, opts):
+        self.passes, self.term, self.average, self.hierarchy, self.block, self.open_ratio = opts
+        self.p_E, self.n_E, self.A = vertex_disks(scene, max_edge=max_edge)
+        self.eps = _self_distance(self.p_E, self.p_E)
+        self.tree = _Tree(self.p_E, self.n_E, self.A) if self.hierarchy else None
+        # W[p]: the disks' accessibility after pass p (W[0] = 1: pass 1 weights every disk fully)
+        self.W = [np.ones(len(self.p_E))]
+
+    def _gather(self, p, n, V_E, eps):
+        if self.tree is not None:
+            return _gather_tree(p, n, self.tree, V_E, self.open_ratio, eps, self.term)
+        return _gather(p, n, self.p_E, self.n_E, self.A, V_E, self.block, eps, self.term)
+
+    def weights(self, p: int) -> np.ndarray:
+        """The disks' accessibility after pass p (computed once)."""
+        while len(self.W) <= p:
+            # Bunnell 2005, Sec. 14.2: the next pass weights each emitter by its accessibility
+            self.W.append(self._gather(self.p_E, self.n_E, self.W[-1], self.eps))
+        return self.W[p]
+
+    def evaluate(self, points, normals, passes=None) -> np.ndarray:
+        P = self.passes if passes is None else passes
+        if points is None:
+            V = self.weights(P)
+            return 0.5 * (V + self.weights(P - 1)) if self.average else V.copy()
+        eps = _self_distance(points, self.p_E)
+        V = self._gather(points, normals, self.weights(P - 1), eps)
+        if self.average:
+            V = 0.5 * (V + self._gather(points, normals, self.weights(P - 2), eps))
+        return V
+
+
+def _resolve_max_edge(scene, max_edge):
+    if max_edge is None:
+        return None
+    if isinstance(max_edge, str):
+        if max_edge != "auto":
+            raise ValueError(f"max_edge must be a positive length, 'auto' or None, got {max_edge!r}")
+        lo, hi = np.asarray(scene.bounds, dtype=np.float64)
+        return AUTO_EDGE_FRACTION * float(np.linalg.norm(hi - lo))
+    return check_positive(max_edge, "max_edge")
+
+
+def _subdivided(mesh, max_edge: float):
+    """``mesh`` with every edge at most ``max_edge`` long (triangles split in four)."""
+    edges = np.asarray(mesh.edges_unique_length, dtype=np.float64)
+    longest = float(edges.max()) if len(edges) else 0.0
+    if longest <= max_edge:
+        return mesh
+    halvings = int(np.ceil(np.log2(longest / max_edge)))
+    # at most 4 triangles per face and halving; refuse what would not fit in memory
+    if len(mesh.faces) * 4.0 ** halvings > MAX_SUBDIVIDED_FACES:
+        raise ValueError(f"max_edge={max_edge:g} would split the mesh's {len(mesh.faces)} triangles "
+                         f"(longest edge {longest:g}) into up to {len(mesh.faces) * 4 ** halvings} > "
+                         f"{MAX_SUBDIVIDED_FACES}; choose a larger max_edge")
+    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge, max_iter=halvings + 1)
+    return trimesh.Trimesh(v, f, process=True)
 
 
 def _as_areas(value, count: int) -> np.ndarray:
@@ -239,104 +485,161 @@ def _self_distance(p_R: np.ndarray, p_E: np.ndarray) -> float:
     return SELF_DISTANCE * max(extent, 1.0)
 
 
-def _shadow(p_R, n_R, p_E, n_E, A, eps) -> np.ndarray:
+def _term(cos_E, cos_R, r2, A, term):
+    """The shadow term from cos_E = -e.n_E, cos_R = e.n_R, r^2 and A (same shapes)."""
+    if term == "form_factor":
+        # the point-to-disk form factor on axis, a^2 / (r^2 + a^2), times the two cosines
+        return A * np.clip(cos_E, 0.0, None) * np.clip(cos_R, 0.0, None) / (np.pi * r2 + A)
+    # on-axis solid-angle fraction of a disk of area A at distance r (Bunnell 2005, Listing 14-1)
+    omega = 1.0 - 1.0 / np.sqrt(1.0 + A / (np.pi * r2))
+    if term == "gpugems":
+        # Listing 14-1: saturate(dot(n_E, v)) casts from the back; saturate(4 dot(n_R, v))
+        return omega * np.clip(-cos_E, 0.0, None) * np.clip(GPUGEMS_RECEIVER_GAIN * cos_R, 0.0, 1.0)
+    return omega * np.clip(cos_E, 0.0, None) * np.clip(cos_R, 0.0, None)
+
+
+def _shadow(p_R, n_R, p_E, n_E, A, eps, term) -> np.ndarray:
     """(n, k) shadow terms, float64; see :func:`disk_shadow`."""
     v = p_E[None, :, :] - p_R[:, None, :]           # receiver -> emitter
     r2 = np.einsum("ijk,ijk->ij", v, v)
     coincide = r2 <= eps * eps
     r2 = np.where(coincide, 1.0, r2)
     e = v / np.sqrt(r2)[..., None]
-    cos_E = np.clip(-np.einsum("ijk,jk->ij", e, n_E), 0.0, None)   # emitter faces receiver
-    cos_R = np.clip(np.einsum("ijk,ik->ij", e, n_R), 0.0, None)    # emitter above the plane
-    # Bunnell 2005: on-axis solid-angle fraction of a disk of area A at distance r
-    S = (1.0 - 1.0 / np.sqrt(1.0 + A[None, :] / (np.pi * r2))) * cos_E * cos_R
+    S = _term(-np.einsum("ijk,jk->ij", e, n_E), np.einsum("ijk,ik->ij", e, n_R), r2, A[None, :], term)
     S[coincide] = 0.0
     return S
 
 
-def _gather(p_R, n_R, p_E, n_E, A, V_E, block, eps) -> np.ndarray:
+def _gather(p_R, n_R, p_E, n_E, A, V_E, block, eps, term) -> np.ndarray:
     """V(i) = clip(1 - sum_j S_ij V_E(j), 0, 1), receivers in blocks of ``block``."""
     V = np.empty(len(p_R))
     for start in range(0, len(p_R), block):
         sl = slice(start, start + block)
-        V[sl] = 1.0 - _shadow(p_R[sl], n_R[sl], p_E, n_E, A, eps) @ V_E
+        V[sl] = 1.0 - _shadow(p_R[sl], n_R[sl], p_E, n_E, A, eps, term) @ V_E
     return np.clip(V, 0.0, 1.0)
 
 
 class _Tree:
-    """Binary tree of aggregated disks by median splits along the longest axis.
+    """Binary tree of aggregated disks: one subtree per group of normals (the axis and sign of
+    their largest component), each by median splits along its longest axis.
 
-    Leaves are the single disks (node j < k is disk j). ``members[i]`` lists the disks
-    under node i; ``children[i]`` is (left, right) or (-1, -1) for a leaf.
+    Nodes 0..k-1 are the disks themselves; internal nodes follow, each after its two
+    children. ``children[i]`` is (left, right), (-1, -1) for a disk. Each node is one disk:
+    the sum of its disks' areas, their area-weighted mean centre and unit mean normal (zero
+    when the normals cancel: such a node casts nothing), and a bounding radius that holds
+    every disk under it (centre distance plus the disk's own radius).
     """
 
     def __init__(self, p_E, n_E, A):
         k = len(p_E)
         self.k = k
-        members = [np.array([j]) for j in range(k)]
-        children = [(-1, -1)] * k
+        left, right, height = [], [], []
 
         def build(idx):
             if len(idx) == 1:
-                return int(idx[0])
+                return int(idx[0]), 0
             pts = p_E[idx]
             axis = int(np.argmax(pts.max(axis=0) - pts.min(axis=0)))
             order = idx[np.argsort(pts[:, axis], kind="stable")]
             half = len(order) // 2
-            left, right = build(order[:half]), build(order[half:])
-            members.append(order)
-            children.append((left, right))
-            return len(members) - 1
+            (l, hl), (r, hr) = build(order[:half]), build(order[half:])
+            left.append(l)
+            right.append(r)
+            height.append(1 + max(hl, hr))
+            return k + len(left) - 1, height[-1]
 
-        self.root = build(np.arange(k)) if k else -1
-        self.members = members
-        self.children = np.array(children, dtype=np.intp).reshape(-1, 2)
-        m = len(members)
-        self.area = np.array([A[mem].sum() for mem in members])
-        w = [A[mem] / max(A[mem].sum(), 1e-300) for mem in members]
-        self.centre = np.array([w_i @ p_E[mem] for w_i, mem in zip(w, members)]).reshape(m, 3)
-        normal = np.array([w_i @ n_E[mem] for w_i, mem in zip(w, members)]).reshape(m, 3)
-        length = np.linalg.norm(normal, axis=1, keepdims=True)
-        # a node whose disks' normals cancel has no orientation: it casts nothing
-        self.normal = np.where(length > 1e-12, normal / np.maximum(length, 1e-300), 0.0)
-        self.radius = np.array([
-            np.max(np.linalg.norm(p_E[mem] - c, axis=1) + np.sqrt(A[mem] / np.pi))
-            for mem, c in zip(members, self.centre)])
-        self.weights = w
+        def join(a, b):
+            left.append(a[0])
+            right.append(b[0])
+            height.append(1 + max(a[1], b[1]))
+            return k + len(left) - 1, height[-1]
+
+        # Disks facing opposite ways (the two sides of a thin wall) must not share a node:
+        # their mean normal cancels and the node would cast nothing. So the disks are first
+        # grouped by the axis and sign of their normal's largest component, one subtree each,
+        # and the groups are joined only at the top, where no receiver in the scene is far
+        # enough to use a node as one disk.
+        axis = np.argmax(np.abs(n_E), axis=1) if k else np.zeros(0, dtype=np.intp)
+        group = 2 * axis + (n_E[np.arange(k), axis] < 0)
+        subtrees = [build(np.flatnonzero(group == g)) for g in range(6) if np.any(group == g)]
+        while len(subtrees) > 1:
+            subtrees = [join(*subtrees[i:i + 2]) if i + 1 < len(subtrees) else subtrees[i]
+                        for i in range(0, len(subtrees), 2)]
+        self.root = subtrees[0][0] if k else -1
+        m = k + len(left)
+        self.children = np.full((m, 2), -1, dtype=np.intp)
+        self.children[k:, 0], self.children[k:, 1] = left, right
+        self.height = np.concatenate([np.zeros(k, dtype=np.intp), np.asarray(height, dtype=np.intp)])
+        self.area = np.zeros(m)
+        self.area[:k] = A
+        self.centre = np.zeros((m, 3))
+        self.centre[:k] = p_E
+        normal_sum = np.zeros((m, 3))
+        normal_sum[:k] = A[:, None] * n_E
+        self.radius = np.zeros(m)
+        self.radius[:k] = np.sqrt(A / np.pi)
+        self.levels = [np.flatnonzero(self.height == h) for h in range(1, int(self.height.max(initial=0)) + 1)]
+        for nodes in self.levels:       # children before parents, one vectorized level at a time
+            l, r = self.children[nodes, 0], self.children[nodes, 1]
+            self.area[nodes] = self.area[l] + self.area[r]
+            w_l = np.where(self.area[nodes] > 0, self.area[l] / np.maximum(self.area[nodes], 1e-300), 0.5)
+            self.centre[nodes] = w_l[:, None] * self.centre[l] + (1.0 - w_l)[:, None] * self.centre[r]
+            normal_sum[nodes] = normal_sum[l] + normal_sum[r]
+            self.radius[nodes] = np.maximum(
+                np.linalg.norm(self.centre[l] - self.centre[nodes], axis=1) + self.radius[l],
+                np.linalg.norm(self.centre[r] - self.centre[nodes], axis=1) + self.radius[r])
+        length = np.linalg.norm(normal_sum, axis=1, keepdims=True)
+        self.normal = np.where(length > 1e-12 * np.maximum(self.area, 1e-300)[:, None],
+                               normal_sum / np.maximum(length, 1e-300), 0.0)
 
     def accessibility(self, V_E):
-        """Each node's area-weighted mean accessibility of its disks."""
-        return np.array([w_i @ V_E[mem] for w_i, mem in zip(self.weights, self.members)])
+        """Each node's area-weighted mean accessibility of its disks (1 for a node of no area)."""
+        weighted = np.zeros(len(self.area))
+        weighted[:self.k] = self.area[:self.k] * V_E
+        for nodes in self.levels:
+            weighted[nodes] = weighted[self.children[nodes, 0]] + weighted[self.children[nodes, 1]]
+        return np.where(self.area > 0, weighted / np.maximum(self.area, 1e-300), 1.0)
 
 
-def _gather_tree(p_R, n_R, tree, V_E, open_ratio, eps) -> np.ndarray:
-    """The hierarchical form of :func:`_gather`: frontier of (receiver, node) pairs."""
-    total = np.zeros(len(p_R))
+def _traverse(p_R, tree, open_ratio, visit):
+    """Walk the tree for every receiver as a vectorized frontier of (receiver, node) pairs;
+    ``visit(receivers, nodes)`` is called on the pairs used as one disk. Returns their count."""
+    count = 0
     if tree.root < 0 or not len(p_R):
-        return np.clip(1.0 - total, 0.0, 1.0)
-    V_node = tree.accessibility(V_E)
+        return count, None
     r_idx = np.arange(len(p_R))
     node = np.full(len(p_R), tree.root, dtype=np.intp)
     while len(r_idx):
         d = np.linalg.norm(p_R[r_idx] - tree.centre[node], axis=1)
         use = (node < tree.k) | (d > open_ratio * tree.radius[node])
-        ri, ni = r_idx[use], node[use]
-        S = _shadow_pairs(p_R[ri], n_R[ri], tree.centre[ni], tree.normal[ni], tree.area[ni], eps)
-        np.add.at(total, ri, S * V_node[ni])
+        count += int(np.count_nonzero(use))
+        if visit is not None:
+            visit(r_idx[use], node[use])
         r_idx, node = r_idx[~use], node[~use]
         r_idx = np.concatenate([r_idx, r_idx])
         node = np.concatenate([tree.children[node, 0], tree.children[node, 1]])
+    return count, None
+
+
+def _gather_tree(p_R, n_R, tree, V_E, open_ratio, eps, term) -> np.ndarray:
+    """The hierarchical form of :func:`_gather`."""
+    total = np.zeros(len(p_R))
+    V_node = tree.accessibility(V_E)
+
+    def visit(ri, ni):
+        S = _shadow_pairs(p_R[ri], n_R[ri], tree.centre[ni], tree.normal[ni], tree.area[ni], eps, term)
+        total[:] += np.bincount(ri, weights=S * V_node[ni], minlength=len(p_R))
+
+    _traverse(p_R, tree, open_ratio, visit)
     return np.clip(1.0 - total, 0.0, 1.0)
 
 
-def _shadow_pairs(p_R, n_R, p_E, n_E, A, eps) -> np.ndarray:
+def _shadow_pairs(p_R, n_R, p_E, n_E, A, eps, term) -> np.ndarray:
     """(n,) shadow terms of emitter i on receiver i; see :func:`disk_shadow`."""
     v = p_E - p_R
     r2 = np.einsum("ij,ij->i", v, v)
     coincide = r2 <= eps * eps
     r2 = np.where(coincide, 1.0, r2)
     e = v / np.sqrt(r2)[:, None]
-    cos_E = np.clip(-np.einsum("ij,ij->i", e, n_E), 0.0, None)
-    cos_R = np.clip(np.einsum("ij,ij->i", e, n_R), 0.0, None)
-    S = (1.0 - 1.0 / np.sqrt(1.0 + A / (np.pi * r2))) * cos_E * cos_R   # Bunnell 2005
+    S = _term(-np.einsum("ij,ij->i", e, n_E), np.einsum("ij,ij->i", e, n_R), r2, A, term)
     return np.where(coincide, 0.0, S)
