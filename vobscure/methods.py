@@ -19,7 +19,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson')
+('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson', 'bunnell')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -80,6 +80,7 @@ QUANTITIES = {
     "cosine AO": Quantity("cosine AO", "ao"),
     "uniform AO": Quantity("uniform AO", "ao_uniform"),
     "sky visibility": Quantity("sky visibility", "sky"),
+    "uniform sky visibility": Quantity("uniform sky visibility", "sky_uniform"),
     "obscurance": Quantity("obscurance", "obscurance"),
 }
 
@@ -448,3 +449,24 @@ register(Method("poisson", _poisson, default_samples=1, fetch="none", fetch_para
                 summary="Poisson leaf cloud in the canopy's bounding sphere: the expected visibility "
                         "(1/pi) int exp(-sigma L) cos, sigma = n A / 2 from the leaf statistics, nothing "
                         "fitted; leaves and ground; vegetation scenes only"))
+
+
+def _uniform_sky_visibility(normal_clamp: bool = False) -> str:
+    """Bunnell's disks (Listing 14-1's term) estimate the uniformly weighted visibility of the
+    whole sky: a solid-angle fraction per disk, no distance limit."""
+    return "uniform sky visibility"
+
+
+def _bunnell(gbuffer, **kwargs):
+    """Bunnell 2005 disk AO per pixel (objectspace.bunnell_gbuffer), the meshes subdivided to
+    max_edge="auto" so that coarse walls (the Cornell box's) become surfaces of disks."""
+    from .objectspace import bunnell_gbuffer
+
+    kwargs.setdefault("max_edge", "auto")
+    return bunnell_gbuffer(gbuffer, **kwargs)
+
+
+register(Method("bunnell", _bunnell, default_samples=1, fetch="none", fetch_parameter=None, taps=_no_taps,
+                quantity=_uniform_sky_visibility, samples=None, needs_scene=True,
+                summary="Bunnell 2005 (GPU Gems 2 ch. 14): a disk per vertex, Listing 14-1's shadow term, "
+                        "2 passes, tree of aggregated disks; object space, any mesh scene"))
