@@ -298,7 +298,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson, bunnell
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
