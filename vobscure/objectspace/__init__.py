@@ -19,6 +19,8 @@ from .disks import (
     shadow_evaluations,
     vertex_disks,
 )
+from .spheres import SphereSet, sphere_set, sphere_set_ao, sphere_set_gbuffer, union_visibility
 
 __all__ = ["DEFAULT_TERM", "TERMS", "bunnell", "bunnell_gbuffer", "disk_shadow", "shadow_evaluations",
            "vertex_disks"]
+__all__ += ["SphereSet", "sphere_set", "sphere_set_ao", "sphere_set_gbuffer", "union_visibility"]
