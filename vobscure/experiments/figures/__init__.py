@@ -20,7 +20,8 @@ from pathlib import Path
 __all__ = ["FIGURES", "make_all", "conventions", "screenspace_claims", "fig4_noise", "fig5_thickness",
            "fig6_normals", "fig7_lines_vs_points", "fig8_dual_radii", "table1_timings",
            "error_decomposition", "temporal_stability", "patterns_quality", "hegeman_fig2", "hegeman_fig8",
-           "hegeman_fig9", "hegeman_fig10", "hegeman_tradeoff", "cornell_shading"]
+           "hegeman_fig9", "hegeman_fig10", "hegeman_tradeoff", "cornell_shading",
+           "canopy_models"]
 
 #: Figure name -> module name in this package, in the order :func:`make_all` runs them.
 #: Figures 5-7 share the measurements of :func:`vobscure.experiments.claims.measurement`
@@ -43,6 +44,7 @@ FIGURES = {
     "hegeman_fig10": "hegeman_fig10",
     "hegeman_tradeoff": "hegeman_tradeoff",
     "cornell_shading": "cornell_shading",
+    "canopy_models": "canopy_models",
 }
 
 
