@@ -19,7 +19,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson', 'bunnell')
+('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson', 'bunnell', 'ren')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -298,7 +298,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson, bunnell
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson, bunnell, ren
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
@@ -470,3 +470,17 @@ register(Method("bunnell", _bunnell, default_samples=1, fetch="none", fetch_para
                 quantity=_uniform_sky_visibility, samples=None, needs_scene=True,
                 summary="Bunnell 2005 (GPU Gems 2 ch. 14): a disk per vertex, Listing 14-1's shadow term, "
                         "2 passes, tree of aggregated disks; object space, any mesh scene"))
+
+
+def _ren(gbuffer, **kwargs):
+    """Ren et al. 2006 per pixel (objectspace.sphere_set_gbuffer): the scene as 32 inscribed
+    spheres, order-4 SH, their log vectors summed and exponentiated once (hybrid exp)."""
+    from .objectspace import sphere_set_gbuffer
+
+    return sphere_set_gbuffer(gbuffer, **kwargs)
+
+
+register(Method("ren", _ren, default_samples=1, fetch="none", fetch_parameter=None, taps=_no_taps,
+                quantity=_sky_visibility, samples=None, needs_scene=True,
+                summary="Ren et al. 2006: the scene as k = 32 inscribed spheres, SH order 4, log vectors "
+                        "summed and exponentiated once (SHEXP, hybrid); cosine AO; any closed mesh scene"))
