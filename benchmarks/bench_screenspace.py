@@ -14,7 +14,9 @@ scene's extent; ``--radius``). The configurations are registry configurations
 (:class:`vobscure.methods.Config`: a method and a sample count, each method's default
 fetch) -- ``point:12``, ``point:33``, ``line:5``, ``line:9``, ``area:1`` -- each with
 ``normal_clamp`` False and True, run through ``Config.run`` (``randomize`` on, every other
-argument at its default). Every configuration runs once on a 16^2 render before anything
+argument at its default); then the engines' baselines without the clamp: ``gtao:3`` and
+``sao:12`` (goal: within 2x of the floor of their own reads) and ``alchemy:12`` (reported,
+no goal). Every configuration runs once on a 16^2 render before anything
 is measured (sample patterns and caches built), and each timed call has one more untimed
 warm-up call (:func:`vobscure.experiments.common.time_calls`).
 
@@ -77,6 +79,10 @@ Run from the repository root::
     python benchmarks/bench_screenspace.py            # 512^2 and 1024^2, a few minutes
     python benchmarks/bench_screenspace.py --quick    # 256^2 and 512^2, under 60 s
     python benchmarks/bench_screenspace.py --repeats 5 --radius 0.3
+    python benchmarks/bench_screenspace.py --only gtao:3,sao:12,alchemy:12   # some rows only
+
+``--only`` times the configurations named (registry labels, as printed; the timed set is
+the same as in a full run, minus the others) and reports only the goals that concern them.
 
 The exit code is 0 unless something raises; no timing is asserted.
 """
@@ -109,6 +115,9 @@ CONFIGS = (Config("point", 12), Config("point", 33), Config("line", 5), Config("
 #: the engines' baselines (issue 13), timed without the normal clamp (they estimate AO, which
 #: has no clamp): GTAO "high" (3 slices x 3 steps a side) and SAO with 12 taps
 BASELINES = (Config("gtao", 3), Config("sao", 12))
+#: baselines timed beside them without a goal: Alchemy AO with 12 taps shares SAO's code
+#: path (a disk of nearest taps, a sum of a term of v = Q - C)
+BASELINE_NOTES = (Config("alchemy", 12),)
 #: configurations measured for memory only, to show the trend with samples
 MEMORY_CONFIGS = (Config("line", 33), Config("line", 65))
 #: peak memory of the second of each pair minus the first's: "not growing with samples"
@@ -147,9 +156,16 @@ class Bench:
         return self.config.run(gb, radius=radius, normal_clamp=self.clamp)
 
 
+#: labels of the configurations to time (``--only``); None: every one
+ONLY = None
+
+
 def configurations() -> list[Bench]:
-    """Every timed configuration, without and then with the normal clamp."""
-    return [Bench(cfg, clamp) for clamp in (False, True) for cfg in CONFIGS] + [Bench(cfg) for cfg in BASELINES]
+    """Every timed configuration, without and then with the normal clamp (those of ``--only``
+    when it is given)."""
+    every = ([Bench(cfg, clamp) for clamp in (False, True) for cfg in CONFIGS]
+             + [Bench(cfg) for cfg in BASELINES + BASELINE_NOTES])
+    return every if ONLY is None else [b for b in every if b.name in ONLY]
 
 
 def warm_up(radius: float):
@@ -157,8 +173,13 @@ def warm_up(radius: float):
     caches are built outside the timings and the memory traces."""
     scene = vo.scenes.cornell_box()
     gb = vo.render_gbuffer(scene, scene.camera((16, 16)))
-    for b in configurations() + [Bench(cfg) for cfg in MEMORY_CONFIGS]:
+    for b in configurations() + [Bench(cfg) for cfg in _memory_configs()]:
         b.call(gb, radius)
+
+
+def _memory_configs():
+    """The memory-only configurations, unless ``--only`` leaves out the lines."""
+    return MEMORY_CONFIGS if ONLY is None else ()
 
 
 # --------------------------------------------------------------------------- the gather floor
@@ -249,13 +270,16 @@ def _internals():
     estimators index. The counter reaches, by attribute and not by import, (1) the
     estimators' shared module (``vobscure.screenspace.line.C``, the module whose
     ``prepare`` every estimator calls for its per-chunk pixels and whose ``PaddedDepth``
-    holds ``vo_line``'s bordered depth copy) and (2) ``vo_area``'s mip-map class
-    (``vobscure.screenspace.area._Pyramid``). If a refactoring moves them the count fails
+    holds ``vo_line``'s bordered depth copy), (2) ``vo_area``'s mip-map class
+    (``vobscure.screenspace.area._Pyramid``) and (3) the module of ``sao`` and ``alchemy``,
+    whose ``_background_as_nan`` makes the depth copy their taps read. If a refactoring moves them the count fails
     with a NOTE and the rest of the benchmark runs.
     """
+    import importlib
+
     from vobscure.screenspace import area, line
 
-    return line.C, area._Pyramid
+    return line.C, area._Pyramid, importlib.import_module("vobscure.screenspace.sao")
 
 
 @contextmanager
@@ -263,9 +287,10 @@ def counting_reads():
     """While active, the depth arrays of prepare()'s result, vo_line's padded depth copy and
     the area mip-map's arrays count the elements gathered from them. Patches class and
     module attributes only, and restores them."""
-    common, pyramid = _internals()
+    common, pyramid, sao_module = _internals()
     original_prepare, original_build = common.prepare, pyramid._build
     original_padded = common.PaddedDepth.__init__
+    original_nan = sao_module._background_as_nan
 
     def prepare(*args, **kwargs):
         px = original_prepare(*args, **kwargs)
@@ -288,9 +313,15 @@ def counting_reads():
         original_padded(self, *args, **kwargs)
         self.flat = _count(self.flat)
 
+    def background_as_nan(*args, **kwargs):
+        # sao's and alchemy's taps read a copy of the depth buffer with background as NaN
+        return _count(original_nan(*args, **kwargs))
+
     patched = [(common, "prepare", original_prepare), (pyramid, "_build", original_build),
-               (common.PaddedDepth, "__init__", original_padded)]
+               (common.PaddedDepth, "__init__", original_padded),
+               (sao_module, "_background_as_nan", original_nan)]
     common.prepare, pyramid._build, common.PaddedDepth.__init__ = prepare, build, padded_init
+    sao_module._background_as_nan = background_as_nan
     try:
         yield
     finally:
@@ -390,7 +421,7 @@ def bench_size(size: int, radius: float, repeats: int, reads: dict, report: Repo
 
     peaks = {b.name: peak_bytes(lambda b=b: b.call(gb, radius)) / pixels_all for b in configs}
     peaks["setup"] = peak_bytes(lambda: valid_pixels(gb, radius)) / pixels_all
-    for cfg in MEMORY_CONFIGS:
+    for cfg in _memory_configs():
         peaks[cfg.label] = peak_bytes(lambda cfg=cfg: Bench(cfg).call(gb, radius)) / pixels_all
 
     report.header(f"{size}x{size}: median of {repeats} interleaved rounds; floor = texels/px one-texel reads")
@@ -400,8 +431,10 @@ def bench_size(size: int, radius: float, repeats: int, reads: dict, report: Repo
     report.row("valid-pixel setup", t["setup"], peak=peaks["setup"], note="(what every estimator starts with)")
     for T in floors:
         report.row(f"gather floor {T}", t[f"floor {T}"], T, T, float(T))
-    print("  peak extra memory per pixel against the sample count (B/px):")
-    for a, b in GROWTH_PAIRS:
+    pairs = [(a, b) for a, b in GROWTH_PAIRS if a.label in peaks and b.label in peaks]
+    if pairs:
+        print("  peak extra memory per pixel against the sample count (B/px):")
+    for a, b in pairs:
         pa, pb = peaks[a.label], peaks[b.label]
         print(f"    {a.label:>8} vs {b.label:<8}: {pa:7.1f} vs {pb:7.1f}  ({pb - pa:+.1f} B/px, "
               f"{(pb - pa) / (b.samples - a.samples):+.2f} B/px per extra sample)")
@@ -419,13 +452,14 @@ def bench_size(size: int, radius: float, repeats: int, reads: dict, report: Repo
             report.note(f"{tag} {b.name} / gather floor ({b.config.texels} reads)",
                         t[b.name].seconds / floor(b).seconds)
     line = max(c.texels for c in CONFIGS if c.method == "line")
-    report.note(f"{tag} valid-pixel setup alone / gather floor ({line} reads)",
-                t["setup"].seconds / t[f"floor {line}"].seconds)
-    for method in dict.fromkeys(c.method for c in CONFIGS + BASELINES):
+    if f"floor {line}" in t:
+        report.note(f"{tag} valid-pixel setup alone / gather floor ({line} reads)",
+                    t["setup"].seconds / t[f"floor {line}"].seconds)
+    for method in dict.fromkeys(b.method for b in configs):
         worst = max((b for b in configs if b.method == method), key=lambda b: peaks[b.name])
         report.goal(f"{tag} peak memory, worst {method} ({worst.name})", peaks[worst.name],
                     GOAL_BYTES_PER_PIXEL, at_least=False, unit=" B/px")
-    for a, b in GROWTH_PAIRS:
+    for a, b in pairs:
         report.goal(f"{tag} peak memory growth, {a.label} -> {b.label}", peaks[b.label] - peaks[a.label],
                     GOAL_GROWTH_BYTES, at_least=False, unit=" B/px")
 
@@ -434,14 +468,27 @@ def bench_size(size: int, radius: float, repeats: int, reads: dict, report: Repo
 def parse_args(argv):
     parser = _bench.parser(__doc__, quick="256^2 and 512^2 (< 60 s), for smoke tests", statistic="median")
     parser.add_argument("--radius", type=float, default=RADIUS, help=f"ball radius (default {RADIUS})")
+    parser.add_argument("--only", default=None, metavar="LABELS",
+                        help="comma-separated configurations to time, as labelled in the report "
+                             "(e.g. 'gtao:3,sao:12,alchemy:12' or 'line:9 clamp'); default every one")
     args = _bench.parse(parser, argv)
     if not args.radius > 0:
         parser.error("--radius must be > 0")
+    if args.only is not None:
+        args.only = tuple(label.strip() for label in args.only.split(",") if label.strip())
+        every = {b.name for b in [Bench(cfg, clamp) for clamp in (False, True) for cfg in CONFIGS]
+                 + [Bench(cfg) for cfg in BASELINES + BASELINE_NOTES]}
+        unknown = sorted(set(args.only) - every)
+        if unknown or not args.only:
+            parser.error(f"--only: unknown configuration(s) {', '.join(unknown) or '(none given)'}; "
+                         f"expected labels among {', '.join(sorted(every))}")
     return args
 
 
 def main(argv=None) -> int:
+    global ONLY
     args = parse_args(argv)
+    ONLY = args.only
     sizes = QUICK_SIZES if args.quick else FULL_SIZES
 
     def body(report):

@@ -45,42 +45,118 @@ def _check(gbuffer, radius, samples, sigma, k, epsilon, offscreen, noise_size):
     return gb, radius, samples, sigma, k, epsilon
 
 
-def _tap(px: C.Pixels, ox: np.ndarray, oy: np.ndarray, offscreen: str):
-    """v = Q - C for the taps at unit-disk offsets (ox, oy) (k,) of each pixel, nearest fetch.
+def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offscreen: str, summand,
+               finish) -> np.ndarray:
+    """(H, W) image of ``finish(total, px)``, total (k,) the sum over the taps of a summand.
 
-    The tap moves to the centre of the pixel it falls in (off the image: to the nearest
-    border pixel with ``offscreen="clamp"``), and Q is that pixel's view-space point (its
-    depth on its own view ray), so that Q is a point of the depth buffer's surface.
-    Returns (vx, vy, vz, ok), ok False where the tap reads background (or an off-screen tap
-    with ``offscreen="open"``): no occluder there.
+    The taps are at unit-disk offsets (u0, w0) (s,), turned per pixel by the angle phi of
+    the tiled rotation texture: (cos phi u0 - sin phi w0, sin phi u0 + cos phi w0). Pixels
+    are processed in groups that share one texel (:func:`~vobscure.screenspace._common.
+    noise_classes`), so a group's rotated offsets are s scalars and only the projected
+    radius varies per pixel.
+
+    A tap moves to the centre of the pixel it falls in (off the image: to the nearest border
+    pixel with ``offscreen="clamp"``), and Q is that pixel's view-space point (its depth on
+    its own view ray), so that Q is a point of the depth buffer's surface. ``summand(px)``
+    is called once per group of pixels ``px`` and returns a function ``f(vx, vy, vz, term)``
+    that receives the (k,) components of v = Q - C of one tap and writes the tap's term
+    into ``term`` (all four are buffers reused from tap to tap). Where the tap reads background
+    (or, with ``offscreen="open"``, leaves the image) the depth read is NaN, so v is NaN;
+    the summand must give 0 there (``np.fmax`` with 0 does). Every array operation writes
+    into one of these buffers: no temporary is allocated per tap.
     """
-    x, y, _ = C.disk_pixels(px, np.column_stack([ox, oy]), snap=True)
-    if offscreen == "clamp":
-        # the tap moves to the nearest border pixel, position and depth: Q is that pixel's
-        # point (reading the border depth at the off-screen position would invent a step)
-        H, W = px.shape
-        x = np.clip(x, 0.5, W - 0.5)
-        y = np.clip(y, 0.5, H - 0.5)
-    d = C.fetch_depth(px.depth, x, y, offscreen=offscreen)
-    ok = np.isfinite(d)
-    d = np.where(ok, d, px.z)
-    # the camera's projection inverted (Camera.project): X = (x - cx) Z / fx,
-    # Y = (cy - y) Z / fy (perspective); X = (x - cx) / fx, Y = (cy - y) / fy (orthographic)
-    qx = (x - px.cx) / px.fx
-    qy = (px.cy - y) / px.fy
-    if px.perspective:
-        qx = qx * d
-        qy = qy * d
-    p = px.p
-    return qx - p[:, 0], qy - p[:, 1], d - px.z, ok
+    gb, depth64, index = C.frame(gb, radius)
+    H, W = gb.depth.shape
+    out = np.full(H * W, np.nan, dtype=C.out_dtype(gb))
+    if not len(index):
+        return out.reshape(H, W)
+    depth_nan = _background_as_nan(depth64)
+    for chunk, rotation in C.noise_classes(depth64, (H, W), texture):
+        px = C.prepare(gb, radius, index=chunk, depth64=depth64)
+        cphi, sphi = (1.0, 0.0) if rotation is None else (float(rotation[0]), float(rotation[1]))
+        k = len(chunk)
+        centre_x, centre_y = px.col + 0.5, px.row + 0.5
+        p = px.p
+        p_x, p_y = np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1])
+        x, y, d, vx, vy, vz, term = (np.empty(k) for _ in range(7))
+        flat = np.empty(k, dtype=np.intp)
+        total = np.zeros(k)
+        tap_term = summand(px)
+        for a in range(len(u0)):
+            ox = cphi * u0[a] - sphi * w0[a]
+            oy = sphi * u0[a] + cphi * w0[a]
+            # the tap's pixel (column x, row y): the offset (ox, oy) moves the projection by
+            # (R_x ox, -R_y oy) pixels (rows go down)
+            np.multiply(px.radius_px_x, ox, out=x)
+            x += centre_x
+            np.floor(x, out=x)
+            np.multiply(px.radius_px, oy, out=y)
+            np.subtract(centre_y, y, out=y)
+            np.floor(y, out=y)
+            if offscreen == "clamp":
+                np.clip(x, 0, W - 1, out=x)
+                np.clip(y, 0, H - 1, out=y)
+                outside = None
+            else:
+                outside = (x < 0) | (x >= W) | (y < 0) | (y >= H)
+                if outside.any():
+                    np.clip(x, 0, W - 1, out=x)
+                    np.clip(y, 0, H - 1, out=y)
+                else:
+                    outside = None
+            np.multiply(y, W, out=term)
+            term += x
+            flat[...] = term
+            np.take(depth_nan, flat, out=d)
+            if outside is not None:
+                d[outside] = np.nan
+            # Q: the camera's projection inverted at the tap's pixel centre (Camera.project):
+            # X = (x - cx) Z / fx, Y = (cy - y) Z / fy (perspective); without the Z
+            # (orthographic); then v = Q - C
+            np.add(x, 0.5, out=vx)
+            vx -= px.cx
+            vx /= px.fx
+            np.add(y, 0.5, out=vy)
+            np.subtract(px.cy, vy, out=vy)
+            vy /= px.fy
+            if px.perspective:
+                vx *= d
+                vy *= d
+            vx -= p_x
+            vy -= p_y
+            np.subtract(d, px.z, out=vz)
+            tap_term(vx, vy, vz, term)
+            total += term
+        out[chunk] = finish(total, px)
+    return out.reshape(H, W)
 
 
-def _rotation(px: C.Pixels, texture):
-    """(cos phi, sin phi) per pixel from the tiled unit-vector texture, or (1, 0)."""
-    v = C.noise_at(px, texture)
-    if v is None:
-        return np.ones(len(px.index)), np.zeros(len(px.index))
-    return v[:, 0], v[:, 1]
+def _background_as_nan(depth64: np.ndarray) -> np.ndarray:
+    """A copy of the flat float64 depth buffer with background (+inf) as NaN: a tap that
+    reads it gives NaN terms (which ``np.fmax`` with 0 turns into 0), not inf - inf."""
+    return np.where(np.isfinite(depth64), depth64, np.nan)
+
+
+def _dot_products(px: C.Pixels):
+    """``(dots, vv, vn)``: ``dots(vx, vy, vz)`` writes v . v into the buffer ``vv`` and
+    v . n into ``vn``, n the normal of each pixel of ``px`` (taken once, as contiguous
+    components)."""
+    n = px.n
+    n_x, n_y, n_z = (np.ascontiguousarray(n[:, i]) for i in range(3))
+    scratch, vv, vn = np.empty(len(n_x)), np.empty(len(n_x)), np.empty(len(n_x))
+
+    def dots(vx, vy, vz):
+        np.multiply(vx, vx, out=vv)
+        np.multiply(vy, vy, out=scratch)
+        np.add(vv, scratch, out=vv)
+        np.multiply(vz, vz, out=scratch)
+        np.add(vv, scratch, out=vv)
+        np.multiply(vx, n_x, out=vn)
+        np.multiply(vy, n_y, out=scratch)
+        np.add(vn, scratch, out=vn)
+        np.multiply(vz, n_z, out=scratch)
+        np.add(vn, scratch, out=vn)
+    return dots, vv, vn
 
 
 def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, sigma: float = 1.0,
@@ -171,22 +247,30 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     u0, w0 = rho * np.cos(theta), rho * np.sin(theta)
     r2 = radius * radius
 
-    def kernel(px: C.Pixels) -> np.ndarray:
-        cphi, sphi = _rotation(px, texture)
-        n = px.n
-        total = np.zeros(len(px.index))
-        for a in range(s):
-            vx, vy, vz, ok = _tap(px, cphi * u0[a] - sphi * w0[a], sphi * u0[a] + cphi * w0[a], offscreen)
-            vv = vx * vx + vy * vy + vz * vz
-            vn = vx * n[:, 0] + vy * n[:, 1] + vz * n[:, 2]
+    def summand(px):
+        dots, vv, vn = _dot_products(px)
+        bias = px.z * beta
+        inside = np.empty(len(px.z), dtype=bool)
+
+        def tap_term(vx, vy, vz, term):
+            dots(vx, vy, vz)
             # Alchemy 2011, the estimator's summand: max(0, v.n + z_C beta) / (v.v + epsilon),
-            # z_C -> -z (vobscure's depth is positive)
-            term = np.maximum(0.0, vn - px.z * beta) / (vv + epsilon * r2)
-            total += np.where(ok & (vv < r2), term, 0.0)
+            # z_C -> -z (vobscure's depth is positive), over taps inside the sphere of influence
+            np.subtract(vn, bias, out=vn)
+            np.fmax(vn, 0.0, out=vn)
+            np.add(vv, epsilon * r2, out=term)
+            np.divide(vn, term, out=term)
+            # v.v < r^2 is False for a background tap (NaN), as for a tap outside the sphere
+            np.greater_equal(vv, r2, out=inside)
+            np.logical_or(inside, np.isnan(vv), out=inside)
+            term[inside] = 0.0
+        return tap_term
+
+    def finish(total, px):
         # Alchemy 2011: A = max(0, 1 - (2 sigma / s) sum ...)^k (times r: see Notes)
         return np.maximum(0.0, 1.0 - (2.0 * sigma * radius / s) * total) ** k
 
-    return C.run_chunks(gb, radius, kernel, C.out_dtype(gb))
+    return _disk_sums(gb, radius, u0, w0, texture, offscreen, summand, finish)
 
 
 def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: float = 0.01,
@@ -271,18 +355,26 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     u0, w0 = alpha * np.cos(theta), alpha * np.sin(theta)
     r2 = radius * radius
 
-    def kernel(px: C.Pixels) -> np.ndarray:
-        cphi, sphi = _rotation(px, texture)
-        n = px.n
-        total = np.zeros(len(px.index))
-        for a in range(s):
-            vx, vy, vz, ok = _tap(px, cphi * u0[a] - sphi * w0[a], sphi * u0[a] + cphi * w0[a], offscreen)
-            vv = vx * vx + vy * vy + vz * vz
-            vn = vx * n[:, 0] + vy * n[:, 1] + vz * n[:, 2]
-            # SAO 2012, the estimator's summand: max(0, r^2 - v.v)^3 max(0, (v.n - beta) / (v.v + epsilon))
-            term = np.maximum(0.0, r2 - vv) ** 3 * np.maximum(0.0, (vn - beta * radius) / (vv + epsilon * r2))
-            total += np.where(ok, term, 0.0)
+    def summand(px):
+        dots, vv, vn = _dot_products(px)
+
+        def tap_term(vx, vy, vz, term):
+            dots(vx, vy, vz)
+            # SAO 2012, the estimator's summand: max(0, r^2 - v.v)^3 max(0, (v.n - beta) /
+            # (v.v + epsilon)); fmax turns a background tap's NaN into 0 in both factors
+            np.subtract(vn, beta * radius, out=vn)
+            np.add(vv, epsilon * r2, out=term)
+            np.divide(vn, term, out=vn)
+            np.fmax(vn, 0.0, out=vn)
+            np.subtract(r2, vv, out=term)
+            np.fmax(term, 0.0, out=term)
+            np.multiply(vn, term, out=vn)
+            np.multiply(term, term, out=term)
+            term *= vn
+        return tap_term
+
+    def finish(total, px):
         # SAO 2012: A = max(0, 1 - (5 sigma / (s r^6)) sum ...)^k (times r: see Notes)
         return np.maximum(0.0, 1.0 - (5.0 * sigma / (s * radius ** 5)) * total) ** k
 
-    return C.run_chunks(gb, radius, kernel, C.out_dtype(gb))
+    return _disk_sums(gb, radius, u0, w0, texture, offscreen, summand, finish)
