@@ -44,8 +44,8 @@ from ..sampling import shifted_hemisphere_directions, sobol_base
 from ..scenes import as_scene
 from . import sh
 
-__all__ = ["sphere_set_ao", "union_visibility", "sphere_set", "sphere_set_gbuffer", "SphereSet", "METHODS",
-           "MEMORY_PER_POINT", "TOUCH_RTOL"]
+__all__ = ["sphere_set_ao", "union_visibility", "sphere_set", "sphere_set_gbuffer", "inside_mesh", "SphereSet",
+           "METHODS", "MEMORY_PER_POINT", "TOUCH_RTOL"]
 
 #: Methods of :func:`sphere_set_ao`.
 METHODS = ("shexp", "product", "sum")
@@ -357,6 +357,58 @@ def _surface_distance(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return out
 
 
+def _selected(scene, meshes):
+    """Triangles, face normals and names of the chosen meshes of a Scene."""
+    names = list(scene.meshes)
+    if meshes is None:
+        chosen = names
+    else:
+        chosen = [meshes] if isinstance(meshes, str) else list(meshes)
+        unknown = [m for m in chosen if m not in names]
+        if unknown or not chosen:
+            raise ValueError(f"meshes must name meshes of the scene ({', '.join(names)}); got {meshes!r}")
+    mask = np.isin(scene.mesh_index, [names.index(m) for m in chosen])
+    return (np.asarray(scene.triangles, dtype=np.float64)[mask],
+            np.asarray(scene.face_normals, dtype=np.float64)[mask], chosen)
+
+
+def inside_mesh(scene, points, *, meshes=None, votes: int = 3, seed=0) -> np.ndarray:
+    """Which points lie inside the closed meshes of a scene.
+
+    A point is inside when the first surface a random ray from it meets faces away from it
+    (the ray is leaving the solid); the majority of ``votes`` rays decides, so that small
+    holes of a scanned mesh flip few answers.
+
+    Parameters
+    ----------
+    scene : Scene, str or path
+    points : (P, 3) float
+    meshes : sequence of str, optional
+        The meshes that count (default all).
+    votes : int
+        Odd number of rays per point.
+    seed : int, Generator or None
+
+    Returns
+    -------
+    (P,) bool
+
+    Examples
+    --------
+    >>> from vobscure.scenes import cornell_box
+    >>> inside_mesh(cornell_box(), [[0.33, 0.3, 0.37], [0.0, 1.0, 0.0]], meshes="short_box").tolist()
+    [True, False]
+    """
+    scene = as_scene(scene)
+    points = as_points(points, "points")
+    votes = check_int(votes, "votes")
+    if votes % 2 == 0:
+        raise ValueError(f"votes must be odd (a majority decides), got {votes}")
+    triangles, face_normals, _ = _selected(scene, meshes)
+    tracer = Tracer(triangles, face_normals=face_normals, threads=1)
+    return _inside(tracer, face_normals, points, as_rng(seed), votes)
+
+
 def sphere_set(scene, k: int, *, seed=0, meshes=None, samples: int = 20000) -> SphereSet:
     r"""Approximate a closed mesh by k inscribed spheres (k-means of interior points).
 
@@ -402,17 +454,7 @@ def sphere_set(scene, k: int, *, seed=0, meshes=None, samples: int = 20000) -> S
     k = check_int(k, "k")
     samples = check_int(samples, "samples", minimum=k)
     rng = as_rng(seed)
-    names = list(scene.meshes)
-    if meshes is None:
-        chosen = names
-    else:
-        chosen = [meshes] if isinstance(meshes, str) else list(meshes)
-        unknown = [m for m in chosen if m not in names]
-        if unknown or not chosen:
-            raise ValueError(f"meshes must name meshes of the scene ({', '.join(names)}); got {meshes!r}")
-    mask = np.isin(scene.mesh_index, [names.index(m) for m in chosen])
-    triangles = np.asarray(scene.triangles, dtype=np.float64)[mask]
-    face_normals = np.asarray(scene.face_normals, dtype=np.float64)[mask]
+    triangles, face_normals, chosen = _selected(scene, meshes)
     tracer = Tracer(triangles, face_normals=face_normals, threads=1)
     lo, hi = triangles.reshape(-1, 3).min(axis=0), triangles.reshape(-1, 3).max(axis=0)
     interior = []
