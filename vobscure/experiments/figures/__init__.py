@@ -21,7 +21,7 @@ __all__ = ["FIGURES", "make_all", "conventions", "screenspace_claims", "fig4_noi
            "fig6_normals", "fig7_lines_vs_points", "fig8_dual_radii", "table1_timings",
            "error_decomposition", "temporal_stability", "patterns_quality", "hegeman_fig2", "hegeman_fig8",
            "hegeman_fig9", "hegeman_fig10", "hegeman_tradeoff", "cornell_shading",
-           "canopy_models"]
+           "canopy_models", "ren_spheres", "proxy_bunny"]
 
 #: Figure name -> module name in this package, in the order :func:`make_all` runs them.
 #: Figures 5-7 share the measurements of :func:`vobscure.experiments.claims.measurement`
@@ -45,6 +45,8 @@ FIGURES = {
     "hegeman_tradeoff": "hegeman_tradeoff",
     "cornell_shading": "cornell_shading",
     "canopy_models": "canopy_models",
+    "ren_spheres": "ren_spheres",
+    "proxy_bunny": "proxy_bunny",
 }
 
 
