@@ -31,7 +31,7 @@ from ..objectspace.spheres import inside_mesh, sphere_set, sphere_set_ao, union_
 from ..scenes import Scene, cornell_box, load
 
 __all__ = ["SETTINGS", "setting", "union_rows", "proxy_rows", "timing_rows", "hybrid_rows", "BUNNY_PATH",
-           "VARIANTS", "bunny_scene", "cornell_boxes_scene", "ground_grid", "main"]
+           "VARIANTS", "band_limit_rows", "log_table_rows", "bunny_scene", "cornell_boxes_scene", "ground_grid", "main"]
 
 #: The Stanford bunny of the shared data folder (absent on machines without it).
 BUNNY_PATH = Path(__file__).resolve().parents[3] / "shared/data/meshes/stanford-bunny.obj"
@@ -274,6 +274,59 @@ def timing_rows(quick: bool = False, *, seed: int = 0):
     return rows
 
 
+# ----------------------------------------------------------------------------- closed forms
+#: Angular radii (degrees) of the band-limit and log-table tables.
+TABLE_ALPHAS = (5, 10, 20, 30, 45, 60, 75, 90)
+
+
+def band_limit_rows(orders=(3, 4, 5, 6)):
+    """The band limit's error on one sphere wholly above the horizon, per order and angular
+    radius: the SH AO (``"product"``, exact for one sphere) minus the closed form
+    1 - cos(theta) sin(alpha)^2, on axis (theta = 0) and its largest magnitude over
+    theta in [0, pi/2 - alpha] (181 angles). Deterministic."""
+    rows = []
+    p, n = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
+    for order in orders:
+        for a_deg in TABLE_ALPHAS:
+            alpha = np.radians(a_deg)
+            thetas = np.linspace(0.0, np.pi / 2 - alpha, 181)
+            err = []
+            for theta in thetas:
+                c = np.array([[np.sin(theta), 0.0, np.cos(theta)]]) * 2.0
+                v = sphere_set_ao(p, n, c, [2.0 * np.sin(alpha)], order=order, method="product", clip=False)[0]
+                err.append(v - (1.0 - np.cos(theta) * np.sin(alpha) ** 2))
+            err = np.array(err)
+            rows.append({"order": order, "alpha_deg": a_deg, "error_on_axis": float(err[0]),
+                         "max_abs_error": float(np.max(np.abs(err))),
+                         "theta_of_max_deg": float(np.degrees(thetas[np.argmax(np.abs(err))]))})
+    return rows
+
+
+def log_table_rows(orders=(3, 4, 5, 6)):
+    """The log table's quality per order and angular radius: the round trip
+    ``||exp*(log*(g)) - g||`` (L2 over the sphere, exact exp*) and the optimal-linear
+    exponential's ``||OL(log*(g)) - g||``, with g the visibility vector of one sphere, and
+    whether the eigenvalue floor of :func:`~vobscure.objectspace.sh.sh_log` was active."""
+    from ..objectspace import sh
+
+    rows = []
+    for order in orders:
+        idx = np.arange(order) * (np.arange(order) + 1)
+        for a_deg in TABLE_ALPHAS:
+            alpha = np.radians(a_deg)
+            g = np.zeros(order * order)
+            g[idx] = -sh.cap_zonal(alpha, order)
+            g[0] += np.sqrt(4 * np.pi)
+            lam = np.linalg.eigvalsh(sh.product_matrix(g))
+            f = sh.sh_log(g)
+            rows.append({"order": order, "alpha_deg": a_deg,
+                         "clamped": bool(lam[0] < sh.LOG_EPSILON * lam[-1]),
+                         "round_trip": float(np.linalg.norm(sh.sh_exp(f, method="exact") - g)),
+                         "ol": float(np.linalg.norm(sh.sh_exp(f, method="ol") - g)),
+                         "hybrid": float(np.linalg.norm(sh.sh_exp(f, method="hybrid") - g))})
+    return rows
+
+
 def _print(title, rows):
     print(f"\n## {title}")
     if not rows:
@@ -292,6 +345,8 @@ def main(argv=None) -> int:
     by_count, by_depth = union_rows(quick, seed=seed)
     _print("against the exact union, per sphere count", by_count)
     _print("against the exact union, per occlusion depth", by_depth)
+    _print("band limit, one sphere above the horizon", band_limit_rows())
+    _print("log table", log_table_rows())
     _print("hybrid threshold", hybrid_rows(quick, seed=seed))
     _print("proxies against the mesh (Embree AO)", proxy_rows(quick, seed=seed))
     _print("time per point", timing_rows(quick, seed=seed))
