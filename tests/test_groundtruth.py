@@ -458,3 +458,14 @@ def test_ground_truth_per_pixel_interreflections(crease):
     assert np.array_equal(lit.value[gb.valid & ~occluded], plain.value[gb.valid & ~occluded])
     with pytest.raises(ValueError, match="quantity='ao' only"):
         vo.ground_truth(crease, gb, quantity="obscurance", radius=R, bounces=1, albedo=0.5)
+
+
+def test_interreflections_at_a_concave_edge(crease):
+    # A point on the crease's edge has the rays towards the wall start inside the wall's
+    # solid; they are traced again from the point moved two ray offsets off the wall, so
+    # the edge gets the light of its neighbours instead of paths lost inside the wall.
+    p = np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0]])
+    n = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    e = vo.ambient_occlusion(crease, p, n, rays=4096, bounces=3, albedo=0.8, groups=GROUPS, seed=6)
+    t = (e.value[0] - e.value[1]) / np.hypot(e.stderr[0], e.stderr[1])
+    assert abs(t) < t_threshold(2 * DF), f"edge {e.value[0]:.4f} vs 1e-3 away {e.value[1]:.4f} (t = {t:.1f})"

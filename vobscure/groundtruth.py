@@ -121,7 +121,50 @@ def _hemisphere_rays(tracer, points, normals, offset_normals, base, shifts, weig
     return origins.reshape(-1, 3), dirs.reshape(-1, 3), dirs
 
 
-def _bounce_paths(tracer, o, d, max_distance, bounces, albedo, rng):
+#: Attempts to move a shading point off a surface its rays start behind (see
+#: :func:`_primary_hits`); what is still trapped after them counts as black.
+EDGE_RETRIES = 3
+
+
+def _primary_hits(tracer, o, d, max_distance, p, n, closed):
+    """First hits of the primary rays, with rays that started inside a neighbouring solid
+    traced again from a point moved off it.
+
+    A shading point on a concave edge (a floor pixel touching a wall) has its ray origins
+    moved along each ray by the tracer's offset, which puts the origins of rays towards the
+    wall inside the wall's solid. For black occluders that is harmless (the ray is blocked
+    either way), but the path would continue inside the solid and bring back nothing. In a
+    closed scene a ray leaving a surface can only hit a *back* face from inside a solid, so
+    those rays are traced again from the point moved by two offsets against the ray's
+    tangential direction (away from the wall), a displacement far below any feature of the
+    scene. Open scenes are left as they are (a back face is a legitimate hit there).
+    """
+    hits = tracer.intersect(o, d, max_distance, threads=1)
+    if not closed:
+        return hits, o
+    dist, prim, bary = hits.distance.copy(), hits.primitive.copy(), hits.barycentric.copy()
+    o = o.copy()
+    shift = np.zeros(len(o))
+    for _ in range(EDGE_RETRIES):
+        hit = prim >= 0
+        back = np.zeros(len(o), dtype=bool)
+        back[hit] = np.einsum("ij,ij->i", tracer.face_normals[prim[hit]], d[hit].astype(np.float64)) > 0.0
+        idx = np.flatnonzero(back)
+        if not len(idx):
+            break
+        d_i = d[idx].astype(np.float64)
+        tangent = d_i - np.einsum("ij,ij->i", d_i, n[idx])[:, None] * n[idx]
+        length = np.linalg.norm(tangent, axis=1, keepdims=True)
+        tangent = np.where(length > 1e-12, tangent / np.maximum(length, 1e-300), 0.0)
+        shift[idx] += 2.0 * tracer.offset
+        moved = p[idx] - shift[idx, None] * tangent
+        o[idx] = tracer.offset_origins(moved, n[idx], d_i[:, None, :])[:, 0, :]
+        again = tracer.intersect(o[idx], d[idx], max_distance, threads=1)
+        dist[idx], prim[idx], bary[idx] = again.distance, again.primitive, again.barycentric
+    return Hits(dist, prim, bary), o
+
+
+def _bounce_paths(tracer, o, d, max_distance, bounces, albedo, rng, p, n, closed):
     """Radiance carried back along each primary ray under a white sky of radiance 1.
 
     Every surface is Lambertian with ``albedo``; a path that leaves the scene (or travels
@@ -131,16 +174,20 @@ def _bounce_paths(tracer, o, d, max_distance, bounces, albedo, rng):
     importance sampling that makes each reflection's weight exactly the albedo
     (Lambertian BRDF a / pi times cos / pdf with pdf = cos / pi).
 
-    o, d : (R, 3) float32 primary ray origins and directions. Returns (R,) float64.
+    o, d : (R, 3) float32 primary ray origins and directions; p, n : (R, 3) float64 the
+    shading point and normal of each ray. Returns (R,) float64.
     """
     value = np.zeros(len(o))
     alive = np.arange(len(o))
     weight = 1.0
     for b in range(bounces + 1):
-        hits = tracer.intersect(o, d, max_distance, threads=1)
+        if b == 0:
+            hits, o = _primary_hits(tracer, o, d, max_distance, p, n, closed)
+        else:
+            hits = tracer.intersect(o, d, max_distance, threads=1)
         escaped = ~hits.hit
         value[alive[escaped]] += weight
-        if b == bounces or albedo == 0.0:
+        if b == bounces:
             break
         keep = hits.hit
         alive = alive[keep]
@@ -164,12 +211,15 @@ def _ao(scene, points, normals, offset_normals, *, rays, weighting, max_distance
     tracer = scene.tracer
     g, m = _groups(rays, groups, "rays")
     rng = as_rng(seed)
+    closed = bool(bounces) and scene.is_watertight
 
     def kernel(s, base, shifts, child):
         o, d, dirs = _hemisphere_rays(tracer, points[s], normals[s], offset_normals[s], base, shifts, weighting)
         P = len(shifts)
         if bounces:
-            carried = _bounce_paths(tracer, o, d, max_distance, bounces, albedo, child)
+            R = g * m
+            carried = _bounce_paths(tracer, o, d, max_distance, bounces, albedo, child,
+                                    np.repeat(points[s], R, axis=0), np.repeat(offset_normals[s], R, axis=0), closed)
             return carried.reshape(P, g, m).mean(axis=2)
         free = ~tracer.occluded(o, d, max_distance, threads=1)
         means = free.reshape(P, g, m).mean(axis=2)
