@@ -24,12 +24,19 @@ from and across the crown. At 10^6 and 10^7 points (10^5 and 10^6 with ``--quick
 - **canopy, sphere** / **canopy, ellipsoid**: ``vobscure.trees.canopy_visibility`` (Eqs.
   4-6) on ``Sphere((0, 0, 0), 1.5)`` and on ``Ellipsoid((0, 0, 0), (2.0, 1.2, 0.9))``
   rotated off the axes, density 0.3. Goals (issue 11): <= 8x and <= 12x the floor.
+- **poisson, sphere** / **poisson, ellipsoid**: ``vobscure.trees.poisson_visibility`` (the
+  Poisson leaf cloud's expected visibility, cosine weighting, extinction 1) on the same
+  shells: a bilinear lookup in a (rho, u) table summed once per call for the call's sigma R.
+  Goal (issue 15): <= 2x ``canopy_visibility`` on the same shell, timed in the same
+  interleaved rounds (the summary prints the ratios). The table's geometry is built once per
+  process, at the first call: that first call is timed on its own, before everything else
+  (``poisson table build``), and is not part of the ratios.
 - **occluder, hegeman / exact (cosine) / porous (cosine, sigma 1)**:
-  ``vobscure.trees.occluder_visibility`` with the same sphere. The porous model integrates
-  over the cap with 2 x 16 Gauss-Legendre nodes per point (4 x 16 inside the sphere), each
-  a call of ``Sphere.chord_length``; it is far above the floor by construction, and is
-  timed in its own interleaved pair (floor, porous) with ONE round after the warm-up (it
-  takes about a minute at 10^7 points).
+  ``vobscure.trees.occluder_visibility`` with the same sphere. The porous model is the direct
+  quadrature of the same integral (``vobscure.trees.sphere_transmittance``: 2 x 16
+  Gauss-Legendre nodes in psi per point, 4 x 16 inside the sphere, each a closed-form chord
+  and azimuthal weight); it is far above the floor by construction, and is timed in its own
+  interleaved pair (floor, porous) with ONE round after the warm-up.
 - **grass**: ``vobscure.trees.grass_visibility(height, h, cos_theta)`` on (n,) float64
   arrays; its own floor is ``np.add(height, cos_theta, out=out)`` (reads 16 B, writes
   8 B per point), the "grass floor".
@@ -63,6 +70,7 @@ from vobscure.trees import (  # noqa: E402
     canopy_visibility,
     grass_visibility,
     occluder_visibility,
+    poisson_visibility,
 )
 
 FULL_SIZES = (10**6, 10**7)
@@ -79,6 +87,8 @@ BLADE_HEIGHT = 0.3
 GOAL_CANOPY_SPHERE = 8.0
 GOAL_CANOPY_ELLIPSOID = 12.0
 GOAL_PEAK_BYTES = 100.0
+#: issue 15's goal: poisson_visibility against canopy_visibility on the same shell
+GOAL_POISSON_VS_CANOPY = 2.0
 
 
 # --------------------------------------------------------------------------- inputs
@@ -120,6 +130,8 @@ def bench_size(n: int, repeats: int, report: Report):
         "copy 56 B/pt": lambda: np.copyto(copy_dst, copy_src),
         "canopy, sphere": lambda: canopy_visibility(points, normals, SPHERE, density=DENSITY),
         "canopy, ellipsoid": lambda: canopy_visibility(points, normals, ELLIPSOID, density=DENSITY),
+        "poisson, sphere": lambda: poisson_visibility(points, normals, SPHERE, extinction=SIGMA),
+        "poisson, ellipsoid": lambda: poisson_visibility(points, normals, ELLIPSOID, extinction=SIGMA),
         "occluder, hegeman": lambda: occluder_visibility(points, normals, SPHERE, model="hegeman"),
         "occluder, exact": lambda: occluder_visibility(points, normals, SPHERE, model="exact"),
         "grass floor": lambda: np.add(height, cos_theta, out=grass_out),
@@ -137,7 +149,8 @@ def bench_size(n: int, repeats: int, report: Report):
     report.header(f"{n:.0e} points ({repeats} rounds; the porous pair 1 round)")
     report.row("floor (einsum row dot)", n, t["floor"], floor_name="", note="reads 48 B, writes 8 B per point")
     report.row("copy 56 B/pt (context)", n, t["copy 56 B/pt"], t["floor"], "points floor")
-    for k in ("canopy, sphere", "canopy, ellipsoid", "occluder, hegeman", "occluder, exact"):
+    for k in ("canopy, sphere", "canopy, ellipsoid", "poisson, sphere", "poisson, ellipsoid", "occluder, hegeman",
+              "occluder, exact"):
         report.row(k, n, t[k], t["floor"], "points floor", peaks[k])
     report.row("occluder, porous", n, tp["occluder, porous"], tp["floor"], "points floor", peaks["occluder, porous"],
                note="(floor of its own pair)")
@@ -150,6 +163,10 @@ def bench_size(n: int, repeats: int, report: Report):
                 GOAL_CANOPY_SPHERE, at_least=False)
     report.goal(f"canopy_visibility, ellipsoid / floor ({tag})",
                 t["canopy, ellipsoid"].seconds / t["floor"].seconds, GOAL_CANOPY_ELLIPSOID, at_least=False)
+    for shell in ("sphere", "ellipsoid"):
+        report.goal(f"poisson_visibility / canopy_visibility, {shell} ({tag})",
+                    t[f"poisson, {shell}"].seconds / t[f"canopy, {shell}"].seconds, GOAL_POISSON_VS_CANOPY,
+                    at_least=False)
     for k in ("occluder, hegeman", "occluder, exact"):
         report.note(f"{k} / floor ({tag})", t[k].seconds / t["floor"].seconds)
     report.note(f"occluder, porous / floor ({tag})", tp["occluder, porous"].seconds / tp["floor"].seconds)
@@ -165,7 +182,12 @@ def main(argv=None) -> int:
     sizes = QUICK_SIZES if args.quick else FULL_SIZES
 
     def body(report):
+        import time
+
         _bench.machine_facts("NumPy code on one thread (the 'cores' column shows what each call got)")
+        t0 = time.perf_counter()
+        poisson_visibility([[0.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]], SPHERE, extinction=SIGMA)
+        print(f"  poisson table build (first call in this process, once): {time.perf_counter() - t0:.3f} s")
         print(f"  mode: {'quick' if args.quick else 'full'}   repeats: median of {args.repeats}   "
               f"sizes: {', '.join(f'{n:.0e}' for n in sizes)} points")
         for n in sizes:

@@ -85,6 +85,8 @@ TABLE_SIGMA_R_MAX = 32.0
 DEFAULT_CHUNK = 1 << 16
 #: Normals shorter than this are rejected (they have no direction).
 ZERO_NORMAL = 1e-12
+#: Floor of |m| |x| in the division that gives u (only the centre, where n.x = 0, reaches it).
+_TINY = 1e-300
 
 
 # ----------------------------------------------------------------------------- the core
@@ -243,8 +245,9 @@ def sphere_transmittance(points, normals, sphere, *, extinction: float, weightin
     return np.clip(V, 0.0, 1.0)
 
 
-#: Points per block of the direct quadrature (its temporaries: 4 quadrature x 16 bytes each).
-_QUADRATURE_CHUNK = 4096
+#: Points per block of the direct quadrature (its temporaries: about ten (block, 4 quadrature)
+#: float64 arrays, 5 MB with the default 16 nodes).
+_QUADRATURE_CHUNK = 1024
 
 
 # ----------------------------------------------------------------------------- the table
@@ -317,17 +320,17 @@ def _occlusion_grid(s: float, weighting: str) -> np.ndarray:
     return np.einsum("ij,ij->i", W, _absorbed(s, L))
 
 
-def _interpolate(grid: np.ndarray, x: np.ndarray, m: np.ndarray, opaque: bool = False) -> np.ndarray:
+def _interpolate(grid: np.ndarray, x: np.ndarray, m: np.ndarray, r2: np.ndarray, mm: np.ndarray,
+                 opaque: bool = False) -> np.ndarray:
     """1 - bilinear interpolation of ``grid`` at unit-frame points ``x`` with normals ``m``
-    (any non-zero length), (k,) float64. ``opaque``: the grid is sigma = inf's, whose V
-    jumps at the surface from 0 (every ray from inside is blocked) to the fraction of the
+    (any non-zero length) and their squared lengths ``r2``, ``mm``; (k,) float64.
+    ``opaque``: the grid is sigma = inf's, whose V jumps at the surface from 0 (every ray from inside is blocked) to the fraction of the
     hemisphere outside the tangent plane; points strictly inside get their exact 0."""
-    mm = np.einsum("ij,ij->i", m, m)
-    r2 = np.einsum("ij,ij->i", x, x)
     mx = np.einsum("ij,ij->i", m, x)
     den = mm * r2
     np.sqrt(den, out=den)
-    u = np.divide(mx, den, out=np.ones_like(mx), where=den > 0)   # any u at the centre
+    np.maximum(den, _TINY, out=den)
+    u = np.divide(mx, den, out=mx)              # at the centre (mx = 0) any u: every node is alike
     fa = _table_coordinate(r2)
     fa *= TABLE_RADIAL
     np.clip(u, -1.0, 1.0, out=u)
@@ -428,24 +431,34 @@ def extinction(n_leaves: float, leaf_area: float, shell) -> float:
 
 
 def _unit_frame(shell, P: np.ndarray, N: np.ndarray):
-    """Points and normals in the shell's unit frame (normals by the inverse transpose, not
-    renormalized), float64; the checks of finiteness and of zero normals."""
+    """Points x and normals m in the shell's unit frame (normals by the inverse transpose,
+    not renormalized) with |x|^2 and |m|^2, float64; the checks of finiteness and of zero
+    normals, done on the (k,) squared lengths (a NaN or inf coordinate makes them non-finite)."""
     P = np.asarray(P, dtype=np.float64)
-    if not np.all(np.isfinite(P)):
-        raise ValueError(f"points must be finite; they hold {int(np.count_nonzero(~np.isfinite(P)))} NaN "
-                         f"or inf value(s)")
     N = np.asarray(N, dtype=np.float64)
-    nn = np.einsum("ij,ij->i", N, N)
-    if not np.all(np.isfinite(nn)):
-        raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(nn)))} "
-                         f"NaN or inf row(s)")
-    if np.any(nn < ZERO_NORMAL ** 2):
-        raise ValueError(f"normals hold {int(np.count_nonzero(nn < ZERO_NORMAL ** 2))} zero-length vector(s); "
-                         f"every normal needs a length")
     if isinstance(shell, Sphere):
-        return (P - shell.center) / shell.radius, N
-    A = shell.rotation / shell.radii              # x' = diag(radii)^-1 Q^T (x - c), as a row product
-    return (P - shell.center) @ A, N @ (shell.rotation * shell.radii)
+        x = P - shell.center
+        x *= 1.0 / shell.radius
+        m = N
+    else:
+        A = shell.rotation / shell.radii          # x' = diag(radii)^-1 Q^T (x - c), as a row product
+        x = (P - shell.center) @ A
+        m = N @ (shell.rotation * shell.radii)
+    r2 = np.einsum("ij,ij->i", x, x)
+    if not np.all(np.isfinite(r2)):
+        bad = int(np.count_nonzero(~np.isfinite(P)))
+        if bad:
+            raise ValueError(f"points must be finite; they hold {bad} NaN or inf value(s)")
+        raise ValueError("points must be finite and not so far from the shell that their squared distance "
+                         "overflows")
+    mm = np.einsum("ij,ij->i", m, m)
+    if not np.all(np.isfinite(mm)):
+        raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(N)))} "
+                         f"NaN or inf value(s)")
+    if np.any(mm < ZERO_NORMAL ** 2):
+        raise ValueError(f"normals hold {int(np.count_nonzero(mm < ZERO_NORMAL ** 2))} zero-length vector(s); "
+                         f"every normal needs a length")
+    return x, m, r2, mm
 
 
 def poisson_visibility(points, normals, shell, *, extinction: float, weighting: str = "cosine",
@@ -535,8 +548,7 @@ def poisson_visibility(points, normals, shell, *, extinction: float, weighting: 
     for start in range(0, P.shape[0], chunk):
         sl = slice(start, min(start + chunk, P.shape[0]))
         if len(shells) == 1:
-            x, m = _unit_frame(shells[0], P[sl], N[sl])
-            out[sl] = _interpolate(grids[0], x, m, opaque[0])
+            out[sl] = _interpolate(grids[0], *_unit_frame(shells[0], P[sl], N[sl]), opaque[0])
             continue
         Pc = np.asarray(P[sl], dtype=np.float64)
         if not np.all(np.isfinite(Pc)):
@@ -547,8 +559,7 @@ def poisson_visibility(points, normals, shell, *, extinction: float, weighting: 
         for i, s in enumerate(shells):
             sel = which == i
             if np.any(sel):
-                x, m = _unit_frame(s, Pc[sel], N[sl][sel])
-                V[sel] = _interpolate(grids[i], x, m, opaque[i])
+                V[sel] = _interpolate(grids[i], *_unit_frame(s, Pc[sel], N[sl][sel]), opaque[i])
         out[sl] = V
     np.clip(out, 0.0, 1.0, out=out)
     return out
