@@ -22,10 +22,12 @@ def gb():
 
 
 def test_names_and_unknown_name_lists_them():
-    vegetation = ("hegeman", "hegeman_ellipsoid", "hegeman_multishell", "reeves_blau")
+    vegetation = ("hegeman", "hegeman_ellipsoid", "hegeman_multishell", "reeves_blau", "poisson")
     baselines = ("gtao", "hbao", "alchemy", "sao")
-    assert methods.names() == ("point", "line", "area", "reference") + baselines + vegetation
-    assert methods.names(include_references=False) == ("point", "line", "area") + baselines + vegetation
+    object_space = ("bunnell", "ren")
+    assert methods.names() == ("point", "line", "area", "reference") + baselines + vegetation + object_space
+    assert methods.names(include_references=False) == ("point", "line", "area") + baselines + vegetation + \
+        object_space
     with pytest.raises(ValueError, match="unknown method 'ssao'; expected one of point, line, area, reference, gtao"):
         methods.get("ssao")
 
