@@ -85,7 +85,7 @@ __all__ = ["CANOPY_SCENES", "TREE_SCENES", "GRASS_SCENE", "REFERENCES", "PAPER_M
            "GROUND_COLUMNS", "GRASS_COLUMNS",
            "CONVERGENCE_COLUMNS", "TRADEOFF_COLUMNS", "COST_COLUMNS", "WEIGHTING_COLUMNS", "main",
            "poisson_rows", "poisson_images", "POISSON_COLUMNS", "POISSON_SCENES", "UNIFORM_TWINS",
-           "poisson_main"]
+           "poisson_main", "ellipsoid_map_rows", "ELLIPSOID_MAP_COLUMNS"]
 
 #: The scenes with a canopy (registered names of :func:`vobscure.scenes.get`): the sparse and
 #: dense leaf clouds of Fig. 2 and the two trees (apple-like, poplar-like) of Figs. 3-9.
@@ -546,6 +546,7 @@ def _poisson_leaves(name: str, shell_label: str, quick: bool, seed: int) -> dict
     poisson = {w: T.poisson_visibility(points[score], normals[score], shell, extinction=sigma, weighting=w)
                for w in REFERENCES}
     return {"scene": scene, "shell": shell, "sigma": sigma, "fitted": fitted, "poisson": poisson,
+            "points": points[score], "normals": normals[score],
             "truth": {w: _sub(truth[w], score) for w in REFERENCES}, "truth_rays": s["truth_rays"]}
 
 
@@ -636,6 +637,54 @@ def poisson_rows(quick: bool = False, *, seed: int = 0, scenes=POISSON_SCENES) -
     return rows
 
 
+#: Columns of :func:`ellipsoid_map_rows`.
+ELLIPSOID_MAP_COLUMNS = ("scene", "reference", "radii", "sigma", "rmse_map", "max_map", "bias_map",
+                         "rmse_truth_map", "rmse_truth_exact", "truth_stderr", "points", "nodes")
+#: Leaf points and quadrature nodes of :func:`ellipsoid_map_rows` (full, quick).
+ELLIPSOID_MAP = {False: {"points": 256, "nodes": 64}, True: {"points": 12, "nodes": 24}}
+
+
+def ellipsoid_map_rows(quick: bool = False, *, seed: int = 0,
+                       scenes=("tree", "tree_poplar", "tree_uniform", "tree_poplar_uniform")) -> list[dict]:
+    """The affine map of an ellipsoid (Hegeman 2006, Sec. 3), as :func:`vobscure.trees.poisson_visibility`
+    uses it, against the Poisson leaf cloud's expected visibility in the true ellipsoid
+    (:func:`vobscure.trees.poisson_quadrature`, brute-force quadrature over the hemisphere).
+
+    On the first ``points`` scored leaf points of :func:`poisson_rows` (ellipsoid shell):
+    ``rmse_map``, ``max_map`` and ``bias_map`` of the mapped model against the true
+    ellipsoid's; ``rmse_truth_map`` and ``rmse_truth_exact`` of each against the ray-cast sky
+    visibility (how much of the model's error the map is). Columns
+    :data:`ELLIPSOID_MAP_COLUMNS`.
+    """
+    from .. import trees as T
+
+    cfg = ELLIPSOID_MAP[bool(quick)]
+    rows = []
+    for name in scenes:
+        lv = _poisson_leaves(name, "ellipsoid", bool(quick), int(seed))
+        if name in CANOPY_SCENES:
+            d = _canopy(name, bool(quick), int(seed))
+            P, N = d["points"][d["score"]], d["normals"][d["score"]]
+        else:
+            P, N = lv["points"], lv["normals"]
+        k = min(cfg["points"], len(P))
+        P, N = P[:k], N[:k]
+        shell, sigma = lv["shell"], lv["sigma"]
+        for w in REFERENCES:
+            mapped = lv["poisson"][w][:k]
+            exact = T.poisson_quadrature(P, N, shell, extinction=sigma, weighting=w, nodes=cfg["nodes"])
+            t = np.asarray(lv["truth"][w].value)[:k]
+            diff = mapped - exact
+            rows.append({"scene": name, "reference": w, "radii": "x".join(f"{r:.3g}" for r in shell.radii),
+                         "sigma": float(sigma), "rmse_map": float(np.sqrt(np.mean(diff ** 2))),
+                         "max_map": float(np.max(np.abs(diff))), "bias_map": float(np.mean(diff)),
+                         "rmse_truth_map": float(np.sqrt(np.mean((mapped - t) ** 2))),
+                         "rmse_truth_exact": float(np.sqrt(np.mean((exact - t) ** 2))),
+                         "truth_stderr": float(np.sqrt(np.mean(np.asarray(lv["truth"][w].stderr)[:k] ** 2))),
+                         "points": int(k), "nodes": cfg["nodes"]})
+    return rows
+
+
 def poisson_images(name: str, *, shell: str = "sphere", reference: str = "cosine", quick: bool = False,
                    seed: int = 0) -> dict:
     """The per-pixel images behind :func:`poisson_rows` (the figure ``canopy_models``):
@@ -652,7 +701,8 @@ def poisson_images(name: str, *, shell: str = "sphere", reference: str = "cosine
 
 
 def poisson_main(argv=None) -> int:
-    """:func:`poisson_rows` as a Markdown table (and ``trees_poisson.csv`` with ``--out``): what
+    """:func:`poisson_rows` and :func:`ellipsoid_map_rows` as Markdown tables (and
+    ``trees_poisson.csv``, ``trees_poisson_ellipsoid_map.csv`` with ``--out``): what
     ``python -m vobscure.experiments.trees --poisson [--quick] [--seed N] [--out DIR]`` runs."""
     import argparse
     import time
@@ -668,9 +718,13 @@ def poisson_main(argv=None) -> int:
     t0 = time.perf_counter()
     rows = poisson_rows(args.quick, seed=args.seed)
     print(markdown_table(rows, POISSON_COLUMNS))
+    emap = ellipsoid_map_rows(args.quick, seed=args.seed)
+    print("\n## the ellipsoid's affine map against the true ellipsoid\n")
+    print(markdown_table(emap, ELLIPSOID_MAP_COLUMNS))
     print(f"\n{time.perf_counter() - t0:.1f} s, machine {machine()}")
     if args.out:
         write_csv(Path(args.out) / "trees_poisson.csv", rows, POISSON_COLUMNS, digits=6)
+        write_csv(Path(args.out) / "trees_poisson_ellipsoid_map.csv", emap, ELLIPSOID_MAP_COLUMNS, digits=6)
     return 0
 
 
