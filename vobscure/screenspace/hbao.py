@@ -91,12 +91,20 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
     sin h(S_i) - sin t'(S_i), t' = t + ``angle_bias``; on the direction's line this is the
     paper's sin h - sin t. The paper's blur is not implemented.
 
+    The NVIDIA SDK shader of HBAO (checked in its public ports) has the same per-direction
+    sum -- W(r) = 1 - r^2 / R^2 (``Falloff(d2) = d2 * NegInvR2 + 1``) times the rise of sin h
+    over the running horizon, which starts at the biased tangent, and 1 - ao / N_d -- and
+    differs in two details: it adds the bias to tan t (``g_TanAngleBias``) where vobscure
+    adds ``angle_bias`` to the angle t, and it steps R' / (N_s + 1) "so that the farthest
+    samples are not fully attenuated" where vobscure's taps reach (i + j) R' / N_s.
+
     References
     ----------
     Bavoil, Sainz & Dimitrov, "Image-Space Horizon-Based Ambient Occlusion", SIGGRAPH 2008
     talk (and ShaderX7, Sec. 6.2): AO = 1 - 1/(2 pi) int (sin h - sin t) W dtheta, the
-    per-sample attenuation, the angle bias (equation numbers not verified, see
-    ``docs/screenspace.md``).
+    per-sample attenuation, the angle bias (the talk's and chapter's text were not
+    available: equation numbers are not cited; the structure was checked against the SDK
+    shader, see Notes and ``docs/screenspace.md``).
 
     Examples
     --------

@@ -225,8 +225,11 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     References
     ----------
     McGuire, Osman, Bukowski & Hennessy, "The Alchemy Screen-Space Ambient Obscurance
-    Algorithm", HPG 2011: the final estimator (Sec. 3; equation number not verified, see
-    ``docs/screenspace.md``).
+    Algorithm", HPG 2011: the final estimator (the paper's text was not available: its
+    section and equation numbers are not cited; the estimator and the parameters sigma, beta
+    ("shadow bias, e.g. 1e-4"), epsilon ("avoids divide-by-zero, e.g. 1e-5", absolute in the
+    talk, a fraction of r^2 here), s and k as listed on the authors' HPG 2011 slides). See
+    ``docs/screenspace.md``, "Sources and equation numbers".
 
     Examples
     --------
@@ -297,8 +300,9 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     samples : int
         s, taps per pixel (>= 1, default 12).
     turns : int
-        tau, turns of the spiral (>= 1, default 7; the paper picks tau per s so that taps
-        do not line up, 7 for 9 taps among its choices).
+        tau, turns of the spiral (>= 1, default 7: the authors' reference shader's value,
+        which its comment says was tuned for 9 taps; the shader's library picks a tau per s
+        that minimizes discrepancy, not reproduced here).
     beta : float
         Bias distance as a fraction of r (>= 0, default 0.01): taps count where v . n >
         beta r; planes read fully open.
@@ -330,10 +334,20 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     result is scale invariant and ``sigma`` is the paper's sigma at r = 1 scene unit; beta
     and epsilon scale with r and r^2 for the same reason.
 
+    The falloff (r^2 - v.v)^3 is the one the authors' reference shader recommends and uses
+    by default (its variant "B", "smoother transition to zero"); the same shader marks a
+    step falloff, max(0, (v.n - beta) / (v.v + epsilon)) over taps with v.v < r^2, as the
+    HPG 2012 paper's (its variant "A"), which vobscure does not implement (``alchemy`` has
+    the step falloff with Alchemy's bias).
+
     References
     ----------
-    McGuire, Mara & Luebke, "Scalable Ambient Obscurance", HPG 2012: the spiral pattern and
-    the estimator (Sec. 2-3; equation numbers not verified, see ``docs/screenspace.md``).
+    McGuire, Mara & Luebke, "Scalable Ambient Obscurance", HPG 2012 (the paper's text was
+    not available: its section and equation numbers are not cited). The spiral, tau, the
+    falloff, the 5 sigma / (s r^6) normalization and epsilon = 0.01 as in the authors'
+    reference shader (McGuire & Mara, NVIDIA 2011-2012, BSD licence; G3D's
+    ``AmbientOcclusion_AO.pix`` and its ports): ``tapLocation``, ``fallOffFunction`` (variant
+    B) and ``main``. See ``docs/screenspace.md``, "Sources and equation numbers".
 
     Examples
     --------
@@ -349,7 +363,8 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     tau = check_int(turns, "turns")
     beta = check_positive(beta, "beta", allow_zero=True)
     texture = C.noise_texture(noise_size, seed, 2, randomize)
-    # SAO 2012, the spiral: alpha_i = (i + 0.5) / s, h_i = r' alpha_i, theta_i = 2 pi alpha_i tau + phi
+    # SAO's spiral (reference shader, tapLocation): alpha_i = (i + 0.5) / s, h_i = r' alpha_i,
+    # theta_i = 2 pi alpha_i tau + phi
     alpha = (np.arange(s) + 0.5) / s
     theta = 2.0 * np.pi * alpha * tau
     u0, w0 = alpha * np.cos(theta), alpha * np.sin(theta)
@@ -360,8 +375,9 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
 
         def tap_term(vx, vy, vz, term):
             dots(vx, vy, vz)
-            # SAO 2012, the estimator's summand: max(0, r^2 - v.v)^3 max(0, (v.n - beta) /
-            # (v.v + epsilon)); fmax turns a background tap's NaN into 0 in both factors
+            # SAO's summand (reference shader, fallOffFunction variant B): max(0, r^2 - v.v)^3
+            # max(0, (v.n - beta) / (v.v + epsilon)); fmax turns a background tap's NaN into 0
+            # in both factors
             np.subtract(vn, beta * radius, out=vn)
             np.add(vv, epsilon * r2, out=term)
             np.divide(vn, term, out=vn)
@@ -374,7 +390,8 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
         return tap_term
 
     def finish(total, px):
-        # SAO 2012: A = max(0, 1 - (5 sigma / (s r^6)) sum ...)^k (times r: see Notes)
+        # SAO (reference shader, main): A = max(0, 1 - (5 sigma / (s r^6)) sum ...)^k (times r:
+        # see Notes)
         return np.maximum(0.0, 1.0 - (5.0 * sigma / (s * radius ** 5)) * total) ** k
 
     return _disk_sums(gb, radius, u0, w0, texture, offscreen, summand, finish)
