@@ -161,7 +161,9 @@ def test_methods_page_examples_run(capsys):
 # --- mathematics: KaTeX served by the site itself, formulas as arithmatex spans -------------
 
 _TAG = re.compile(r"<(script|link)\b([^>]*)>", flags=re.I)
-_ATTR = re.compile(r"""\b(src|href)\s*=\s*["']([^"']*)["']""", flags=re.I)
+_ATTR = re.compile(r"""\b(src|href|rel)\s*=\s*["']([^"']*)["']""", flags=re.I)
+# <link> relations whose target the browser fetches with the page (not canonical, alternate, ...)
+_FETCHED_RELS = {"stylesheet", "icon", "preload", "modulepreload", "manifest", "prefetch"}
 _MATH_SPAN = re.compile(r'<(span|div) class="arithmatex">(.*?)</\1>', flags=re.S)
 
 
@@ -170,11 +172,17 @@ def _html_pages(site: Path) -> list[Path]:
 
 
 def _loaded_urls(page_html: str) -> list[str]:
-    """The URLs a page loads by itself: script sources and the hrefs of <link> elements
-    (stylesheets, icons). Hyperlinks (<a href>) are only followed when clicked."""
+    """The URLs a page loads by itself: script sources and the hrefs of the <link> elements
+    the browser fetches (stylesheets, icons, preloads). Hyperlinks (<a href>) and a canonical
+    <link> are only followed when asked for."""
     urls = []
-    for _, attrs in _TAG.findall(page_html):
-        urls += [value for _, value in _ATTR.findall(attrs)]
+    for tag, attrs in _TAG.findall(page_html):
+        found = {name.lower(): value for name, value in _ATTR.findall(attrs)}
+        if tag.lower() == "script" and "src" in found:
+            urls.append(found["src"])
+        elif tag.lower() == "link" and "href" in found:
+            if set(found.get("rel", "").lower().split()) & _FETCHED_RELS:
+                urls.append(found["href"])
     return urls
 
 
