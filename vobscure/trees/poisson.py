@@ -315,9 +315,17 @@ def _table(weighting: str) -> tuple[np.ndarray, np.ndarray]:
 def _occlusion_grid(s: float, weighting: str) -> np.ndarray:
     """The table at sigma R = s: the absorbed fraction at each node, flat (N_a * N_u,)."""
     L, W = _table(weighting)
+    grid = np.zeros(L.shape[0])
     if s == 0:
-        return np.zeros(L.shape[0])
-    return np.einsum("ij,ij->i", W, _absorbed(s, L))
+        return grid
+    for start in range(0, L.shape[0], _GRID_BLOCK):        # blocks: the temporaries stay small
+        sl = slice(start, start + _GRID_BLOCK)
+        grid[sl] = np.einsum("ij,ij->i", W[sl], _absorbed(s, L[sl]))
+    return grid
+
+
+#: Table rows summed at once by ``_occlusion_grid`` (temporaries of 1024 x 96 float64, 0.8 MB).
+_GRID_BLOCK = 1024
 
 
 def _interpolate(grid: np.ndarray, x: np.ndarray, m: np.ndarray, r2: np.ndarray, mm: np.ndarray,
