@@ -332,8 +332,9 @@ def _interpolate(grid: np.ndarray, x: np.ndarray, m: np.ndarray, r2: np.ndarray,
                  opaque: bool = False) -> np.ndarray:
     """1 - bilinear interpolation of ``grid`` at unit-frame points ``x`` with normals ``m``
     (any non-zero length) and their squared lengths ``r2``, ``mm``; (k,) float64.
-    ``opaque``: the grid is sigma = inf's, whose V jumps at the surface from 0 (every ray from inside is blocked) to the fraction of the
-    hemisphere outside the tangent plane; points strictly inside get their exact 0."""
+    ``opaque``: the grid is sigma = inf's, whose V jumps at the surface from 0 (every ray
+    from inside is blocked) to the fraction of the hemisphere outside the tangent plane;
+    points strictly inside get their exact 0."""
     mx = np.einsum("ij,ij->i", m, x)
     den = mm * r2
     np.sqrt(den, out=den)
