@@ -290,8 +290,8 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     inside), evaluated by :func:`vobscure.trees.poisson.sphere_transmittance`. The integral
     is over the cap of directions that meet the sphere, in the angle psi from the direction
     to the centre (the chord depends on psi only) and the azimuth about it, whose integral
-    over the arc above the horizon is done in closed form; the remaining integral in psi is split at the two angles where the arc
-    meets the horizon and each piece is integrated by ``quadrature``-point Gauss-Legendre
+    over the arc above the horizon is done in closed form; the remaining integral in psi is
+    split at the two angles where the arc meets the horizon and each piece is integrated by ``quadrature``-point Gauss-Legendre
     after the substitution psi = a + (b - a)(1 - cos t)/2, which removes the square-root
     behaviour of the chord at the cap's edge and of the arc at the splits (a third split at
     psi = pi/2 for a point inside the sphere). Its error with the default 16 nodes is below
