@@ -291,15 +291,16 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     is over the cap of directions that meet the sphere, in the angle psi from the direction
     to the centre (the chord depends on psi only) and the azimuth about it, whose integral
     over the arc above the horizon is done in closed form; the remaining integral in psi is
-    split at the two angles where the arc meets the horizon and each piece is integrated by ``quadrature``-point Gauss-Legendre
-    after the substitution psi = a + (b - a)(1 - cos t)/2, which removes the square-root
-    behaviour of the chord at the cap's edge and of the arc at the splits (a third split at
-    psi = pi/2 for a point inside the sphere). Its error with the default 16 nodes is below
-    ``POROUS_QUADRATURE_ERROR`` = 1e-6 (measured; 4e-8 outside the sphere). sigma = 0
-    gives 1, sigma = inf the "exact" model. The density of Eq. 6, alpha*rho, converts as
-    ``sigma = 2 pi R^2 alpha_rho / 3``: the inverse of ``vobscure.trees.predict_density``'s
-    ``alpha_rho = 3 sigma / (2 pi R^2)``, which equates Eq. 6 at the centre of the sphere
-    (f = 1, V_cap = 2 pi R^3 / 3) with the transmittance exp(-sigma R) of a radius.
+    split at the two angles where the arc meets the horizon and each piece is integrated by
+    ``quadrature``-point Gauss-Legendre after the substitution psi = a + (b - a)(1 - cos
+    t)/2, which removes the square-root behaviour of the chord at the cap's edge and of the
+    arc at the splits (a third split at psi = pi/2 for a point inside the sphere). Its error
+    with the default 16 nodes is below ``POROUS_QUADRATURE_ERROR`` = 1e-6 (measured; 4e-8
+    outside the sphere). sigma = 0 gives 1, sigma = inf the "exact" model. The density of
+    Eq. 6, alpha*rho, converts as ``sigma = 2 pi R^2 alpha_rho / 3``: the inverse of
+    ``vobscure.trees.predict_density``'s ``alpha_rho = 3 sigma / (2 pi R^2)``, which equates
+    Eq. 6 at the centre of the sphere (f = 1, V_cap = 2 pi R^3 / 3) with the transmittance
+    exp(-sigma R) of a radius.
 
     References
     ----------
