@@ -756,9 +756,9 @@ def _ground(name: str, quick: bool, seed: int) -> dict:
     normals = np.tile([0.0, 1.0, 0.0], (len(points), 1))
     truth = {w: _truth(scene, points, normals, w, s["truth_rays"], seed + 11 + i)
              for i, w in enumerate(REFERENCES)}
-    # the porous sphere's extinction: the Poisson leaf-cloud model's G * (leaf area density),
-    # G = 1/2 for leaves of random orientation, spread over the bounding sphere's volume
-    sigma = 0.5 * md["n_leaves"] * md["leaf_area"] / sphere.volume
+    # the porous sphere's extinction: the Poisson leaf cloud's sigma = n A / 2 (G = 1/2 for
+    # leaves of random orientation), the leaves spread over the bounding sphere's volume
+    sigma = T.extinction(md["n_leaves"], md["leaf_area"], sphere)
     values = {(mdl, w): T.occluder_visibility(points, normals, [sphere], model=mdl, weighting=w,
                                               **({"sigma": sigma} if mdl == "porous" else {}))
               for mdl in ("hegeman", "exact", "porous") for w in REFERENCES}

@@ -25,6 +25,7 @@ from scipy.optimize import minimize_scalar
 
 from .._validate import as_array, check_int, check_positive
 from ._arrays import as_raw_points, out_dtype
+from .poisson import extinction
 from .shells import Ellipsoid, MultiShell, Sphere
 
 __all__ = ["canopy_visibility", "reeves_blau", "fit_density", "predict_density", "optical_depth"]
@@ -435,7 +436,6 @@ def predict_density(n_leaves: float, leaf_area: float, shell) -> float:
     _check_shell(shell, multi=False)
     n_leaves = check_positive(n_leaves, "n_leaves")
     A = check_positive(leaf_area, "leaf_area")
-    n = n_leaves / shell.volume                                 # leaves per unit volume
-    sigma = n * A / 2.0                                         # Cauchy: mean projected area A / 2
+    sigma = extinction(n_leaves, A, shell)                      # sigma = n A / 2 (mean projected area A / 2)
     R = shell.equivalent_radius
     return 3.0 * sigma / (2.0 * math.pi * R * R)                # sigma R = alpha rho * 2 pi R^3 / 3 (Eq. 6, f = 1)

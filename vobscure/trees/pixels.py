@@ -176,7 +176,7 @@ def scene_extinction(scene, shell) -> float:
     True
     """
     meta = scene.metadata
-    return meta["n_leaves"] / _one_shell(scene, shell).volume * meta["leaf_area"] / 2.0
+    return extinction(meta["n_leaves"], meta["leaf_area"], _one_shell(scene, shell))
 
 
 def poisson_gbuffer(gbuffer, *, scene, shell: str = "sphere", weighting: str = "cosine", k: int = 3,
