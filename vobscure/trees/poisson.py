@@ -514,7 +514,7 @@ def poisson_visibility(points, normals, shell, *, extinction: float, weighting: 
     (2 :data:`TABLE_RADIAL` + 1) x (:data:`TABLE_ANGULAR` + 1) nodes in (rho, u), the chords
     and weights of the direct quadrature of :func:`sphere_transmittance`
     (:data:`TABLE_QUADRATURE` nodes per piece), computed once per process and weighting
-    (about 0.3 s); each call sums them for its own s, so the table is exact in s, and
+    (0.15-0.25 s measured); each call sums them for its own s, so the table is exact in s, and
     interpolates bilinearly in (rho, u). Its error against the direct quadrature is below
     :data:`TABLE_ERROR` for s up to :data:`TABLE_SIGMA_R_MAX` and for s = inf (measured, in
     ``docs/trees.md``). At the centre, V = exp(-sigma R) for both weightings to rounding.
