@@ -218,7 +218,12 @@ def rotate_zonal(zonal, direction) -> np.ndarray:
     y = sh_basis(direction, order=n)
     ls = np.repeat(np.arange(n), 2 * np.arange(n) + 1)            # band of every index
     scale = np.sqrt(4.0 * np.pi / (2 * ls + 1))
-    return zonal[..., ls] * scale * y
+    z = zonal[..., ls]
+    if np.broadcast_shapes(y.shape, z.shape) != y.shape:
+        y = np.broadcast_to(y, np.broadcast_shapes(y.shape, z.shape)).copy()
+    y *= z                                                         # in place: one (..., n^2) array
+    y *= scale
+    return y
 
 
 def clamped_cosine_zonal(order: int = 4) -> np.ndarray:
@@ -344,7 +349,9 @@ def _product(f: np.ndarray, g: np.ndarray, G: np.ndarray) -> np.ndarray:
     f, g = np.broadcast_arrays(f, g)
     out = np.zeros(f.shape)
     for j in range(G.shape[1]):
-        out += g[..., j, None] * (f @ G[:, j, :])
+        tmp = f @ G[:, j, :]
+        tmp *= g[..., j, None]
+        out += tmp
     return out
 
 

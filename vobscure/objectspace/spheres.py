@@ -60,7 +60,12 @@ MEMORY_PER_POINT = 1536
 TOUCH_RTOL = 1e-9
 
 #: Receivers per chunk of :func:`sphere_set_ao` (the memory bound is per point).
-DEFAULT_CHUNK = 4096
+DEFAULT_CHUNK = 1024
+
+#: Receivers exponentiated at once within a chunk (the exponentials' temporaries are several
+#: (n, n^2) arrays; ``exp="exact"`` builds an (n, n^2, n^2) product matrix, 10 KB per
+#: receiver at order 6).
+EXP_CHUNK = 256
 
 _SQRT_4PI = np.sqrt(4.0 * np.pi)
 
@@ -128,8 +133,9 @@ def sphere_set_ao(points, normals, centers, radii, *, order: int = 4, method: st
         Cosine-weighted AO (:math:`\frac1\pi\int V \max(0, n\cdot\omega)\,d\omega`) or the
         uniform-hemisphere average.
     chunk : int
-        Receivers evaluated at once. Temporaries are about :data:`MEMORY_PER_POINT` bytes
-        per receiver beyond the (P, n^2) accumulators, whatever the number of spheres.
+        Receivers evaluated at once. The temporaries of a chunk are about
+        :data:`MEMORY_PER_POINT` bytes per receiver plus a few (chunk, n^2) arrays, whatever
+        the number of spheres; the exponential runs on :data:`EXP_CHUNK` receivers at a time.
     clip : bool
         Clip the result to [0, 1]; band-limited products can leave that range.
 
@@ -214,7 +220,9 @@ def sphere_set_ao(points, normals, centers, radii, *, order: int = 4, method: st
             else:
                 acc += vec.sum(axis=1)                             # log vectors add (shexp); caps add (sum)
         if method == "shexp":
-            g = sh.sh_exp(acc, method=exp)                         # one SH exponentiation
+            g = np.empty_like(acc)
+            for e in range(0, P, EXP_CHUNK):                       # one SH exponentiation per receiver
+                g[e:e + EXP_CHUNK] = sh.sh_exp(acc[e:e + EXP_CHUNK], method=exp)
         elif method == "sum":
             g = acc
             g[:, 0] += _SQRT_4PI
