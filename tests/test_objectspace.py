@@ -276,8 +276,9 @@ def test_points_at_the_vertices_match_per_vertex(crease):
                                bunnell(crease), atol=FLOAT32)
 
 
-def test_blocks_do_not_change_the_result(crease):
-    np.testing.assert_allclose(bunnell(crease, block=7, hierarchy=False), bunnell(crease, hierarchy=False),
+@pytest.mark.parametrize("hierarchy", [False, True])
+def test_blocks_do_not_change_the_result(crease, hierarchy):
+    np.testing.assert_allclose(bunnell(crease, block=7, hierarchy=hierarchy), bunnell(crease, hierarchy=hierarchy),
                                atol=EXACT)
 
 

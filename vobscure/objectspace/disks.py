@@ -48,8 +48,12 @@ DEFAULT_TERM = "gpugems"
 #: 14.5 degrees above the receiver's tangent plane up.
 GPUGEMS_RECEIVER_GAIN = 4.0
 
-#: Receivers evaluated at once against all emitters (memory: BLOCK * n_emitters * 3 floats).
+#: Receivers evaluated at once: against every emitter (the exact sum), or walking the tree.
 DEFAULT_BLOCK = 512
+
+#: The exact sum evaluates at most this many (receiver, emitter) pairs at once (fewer
+#: receivers than ``block`` per step for large meshes; about 100 bytes per pair).
+PAIR_BUDGET = 2 ** 18
 
 #: An emitter closer to the receiver than this fraction of the scene extent is the
 #: receiver's own disk and casts no shadow (the term is undefined at zero distance).
@@ -239,7 +243,8 @@ def bunnell(scene, points=None, normals=None, *, passes: int = 2, term: str = DE
     max_edge : float, "auto" or None
         Subdivide the meshes first (:func:`vertex_disks`).
     block : int
-        Receivers evaluated at once (memory ``block * k`` floats per array); exact sum only.
+        Receivers evaluated at once: against all k disks (at most :data:`PAIR_BUDGET` pairs
+        at once, fewer receivers for a large k), or walking the tree.
     open_ratio : float
         With ``hierarchy``: a node is used as one disk when the receiver is farther from
         its centre than ``open_ratio`` times its bounding radius; else its children are.
@@ -423,7 +428,7 @@ class _State:
 
     def _gather(self, p, n, V_E, eps):
         if self.tree is not None:
-            return _gather_tree(p, n, self.tree, V_E, self.open_ratio, eps, self.term)
+            return _gather_tree(p, n, self.tree, V_E, self.open_ratio, eps, self.term, self.block)
         return _gather(p, n, self.p_E, self.n_E, self.A, V_E, self.block, eps, self.term)
 
     def weights(self, p: int) -> np.ndarray:
@@ -513,6 +518,7 @@ def _shadow(p_R, n_R, p_E, n_E, A, eps, term) -> np.ndarray:
 def _gather(p_R, n_R, p_E, n_E, A, V_E, block, eps, term) -> np.ndarray:
     """V(i) = clip(1 - sum_j S_ij V_E(j), 0, 1), receivers in blocks of ``block``."""
     V = np.empty(len(p_R))
+    block = min(block, max(1, PAIR_BUDGET // max(len(p_E), 1)))
     for start in range(0, len(p_R), block):
         sl = slice(start, start + block)
         V[sl] = 1.0 - _shadow(p_R[sl], n_R[sl], p_E, n_E, A, eps, term) @ V_E
@@ -601,27 +607,29 @@ class _Tree:
         return np.where(self.area > 0, weighted / np.maximum(self.area, 1e-300), 1.0)
 
 
-def _traverse(p_R, tree, open_ratio, visit):
+def _traverse(p_R, tree, open_ratio, visit, block=DEFAULT_BLOCK):
     """Walk the tree for every receiver as a vectorized frontier of (receiver, node) pairs;
     ``visit(receivers, nodes)`` is called on the pairs used as one disk. Returns their count."""
     count = 0
     if tree.root < 0 or not len(p_R):
         return count, None
-    r_idx = np.arange(len(p_R))
-    node = np.full(len(p_R), tree.root, dtype=np.intp)
-    while len(r_idx):
-        d = np.linalg.norm(p_R[r_idx] - tree.centre[node], axis=1)
-        use = (node < tree.k) | (d > open_ratio * tree.radius[node])
-        count += int(np.count_nonzero(use))
-        if visit is not None:
-            visit(r_idx[use], node[use])
-        r_idx, node = r_idx[~use], node[~use]
-        r_idx = np.concatenate([r_idx, r_idx])
-        node = np.concatenate([tree.children[node, 0], tree.children[node, 1]])
+    # receivers in blocks, so that the frontier's memory does not grow with the receivers
+    for start in range(0, len(p_R), block):
+        r_idx = np.arange(start, min(start + block, len(p_R)))
+        node = np.full(len(r_idx), tree.root, dtype=np.intp)
+        while len(r_idx):
+            d = np.linalg.norm(p_R[r_idx] - tree.centre[node], axis=1)
+            use = (node < tree.k) | (d > open_ratio * tree.radius[node])
+            count += int(np.count_nonzero(use))
+            if visit is not None:
+                visit(r_idx[use], node[use])
+            r_idx, node = r_idx[~use], node[~use]
+            r_idx = np.concatenate([r_idx, r_idx])
+            node = np.concatenate([tree.children[node, 0], tree.children[node, 1]])
     return count, None
 
 
-def _gather_tree(p_R, n_R, tree, V_E, open_ratio, eps, term) -> np.ndarray:
+def _gather_tree(p_R, n_R, tree, V_E, open_ratio, eps, term, block) -> np.ndarray:
     """The hierarchical form of :func:`_gather`."""
     total = np.zeros(len(p_R))
     V_node = tree.accessibility(V_E)
@@ -630,7 +638,7 @@ def _gather_tree(p_R, n_R, tree, V_E, open_ratio, eps, term) -> np.ndarray:
         S = _shadow_pairs(p_R[ri], n_R[ri], tree.centre[ni], tree.normal[ni], tree.area[ni], eps, term)
         total[:] += np.bincount(ri, weights=S * V_node[ni], minlength=len(p_R))
 
-    _traverse(p_R, tree, open_ratio, visit)
+    _traverse(p_R, tree, open_ratio, visit, block)
     return np.clip(1.0 - total, 0.0, 1.0)
 
 
