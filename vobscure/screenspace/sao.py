@@ -62,8 +62,9 @@ def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offsc
     that receives the (k,) components of v = Q - C of one tap and writes the tap's term
     into ``term`` (all four are buffers reused from tap to tap). Where the tap reads background
     (or, with ``offscreen="open"``, leaves the image) the depth read is NaN, so v is NaN;
-    the summand must give 0 there (``np.fmax`` with 0 does). Every array operation writes
-    into one of these buffers: no temporary is allocated per tap.
+    the summand must give 0 there (``np.fmax`` with 0 does). With ``offscreen="clamp"`` every
+    array operation of a tap writes into one of these buffers (no temporary is allocated per
+    tap); ``"open"`` adds a mask of the taps that leave the image.
     """
     gb, depth64, index = C.frame(gb, radius)
     H, W = gb.depth.shape
@@ -253,7 +254,7 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     def summand(px):
         dots, vv, vn = _dot_products(px)
         bias = px.z * beta
-        inside = np.empty(len(px.z), dtype=bool)
+        beyond = np.empty(len(px.z), dtype=bool)
 
         def tap_term(vx, vy, vz, term):
             dots(vx, vy, vz)
@@ -264,9 +265,9 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
             np.add(vv, epsilon * r2, out=term)
             np.divide(vn, term, out=term)
             # v.v < r^2 is False for a background tap (NaN), as for a tap outside the sphere
-            np.greater_equal(vv, r2, out=inside)
-            np.logical_or(inside, np.isnan(vv), out=inside)
-            term[inside] = 0.0
+            np.less(vv, r2, out=beyond)
+            np.logical_not(beyond, out=beyond)
+            np.copyto(term, 0.0, where=beyond)
         return tap_term
 
     def finish(total, px):
