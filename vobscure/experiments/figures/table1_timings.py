@@ -40,8 +40,8 @@ Regenerate with::
 
     python -c "from vobscure.experiments.figures import table1_timings as f; f.make('docs/img')"
 
-(a few minutes on 2 cores; ``quick=True`` in seconds, where the times are dominated by
-per-call overhead and say little).
+(39 s on 2 shared cores at commit cd1976d; ``quick=True`` in seconds, where the times are
+dominated by per-call overhead and say little).
 
 References
 ----------
