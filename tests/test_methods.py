@@ -226,7 +226,7 @@ def test_reeves_blau_per_pixel_uses_the_leaves_extinction():
 @pytest.mark.parametrize("name, n, taps, quantity, reference", [
     ("gtao", 3, 18, "cosine AO", "ao"), ("gtao", 9, 54, "cosine AO", "ao"),
     ("hbao", 8, 32, "uniform AO", "ao_uniform"),
-    ("alchemy", 12, 12, "cosine AO", "ao"), ("sao", 12, 12, "cosine AO", "ao"),
+    ("alchemy", 12, 12, "obscurance", "obscurance"), ("sao", 12, 12, "obscurance", "obscurance"),
 ])
 def test_baselines_in_the_registry(name, n, taps, quantity, reference):
     from vobscure import screenspace
@@ -248,11 +248,14 @@ def test_gtao_taps_are_the_fetches_it_makes(gb, monkeypatch):
 def test_compare_runs_the_baselines_against_their_own_references():
     res = vo.experiments.compare.compare("crease", size=(16, 12), methods="gtao:2,hbao:4,sao:8,line:5",
                                          quick=True, cache=False, write=False, suggest=False)
-    assert set(res.provenance["references"]) == {"screen", "volumetric", "ao", "ao_uniform"}
+    # sao's own reference, the obscurance, is added to the defaults (which keep cosine AO,
+    # the AO a renderer would use)
+    assert set(res.provenance["references"]) == {"screen", "volumetric", "ao", "ao_uniform", "obscurance"}
     rows = {r["label"]: r for r in res.rows}
     assert rows["gtao:2"]["own_reference"] == "ao" and rows["hbao:4"]["own_reference"] == "ao_uniform"
+    assert rows["sao:8"]["own_reference"] == "obscurance"
     assert rows["line:5"]["own_reference"] == "volumetric"
     for r in rows.values():
         assert np.isfinite(r["own_rmse"])
     groups = {g["reference"] for g in res.summary["groups"]}
-    assert {"ao", "ao_uniform", "volumetric", "screen"} <= groups
+    assert {"ao", "ao_uniform", "volumetric", "screen", "obscurance"} <= groups
