@@ -25,6 +25,15 @@ the tree / exact ratios at the largest size both ran.
 Timings are the median (``--repeats``) of interleaved rounds after one warm-up call
 (``_bench.interleaved``); the sizes above 2562 disks get one round.
 
+Section ``spheres`` (issue 15): Ren et al. 2006's sphere sets in SH
+(``vobscure.objectspace.sphere_set_ao``). Receivers on a plane under 1 to 256 spheres (1 to 64
+with ``--quick``) of the same total volume; per SH order (4 and 6; 4 with ``--quick``) and
+count, the median time per receiver of ``method="product"`` (one SH product per sphere),
+``"shexp"`` (log vectors summed, one hybrid exponential) and ``"sum"``, interleaved in the same
+rounds, and the ratio product / shexp (the paper claims 10x or more on the CPU). Then the
+peak extra memory per receiver (``tracemalloc``) at order 6 with 256 spheres
+(64 spheres with ``--quick``), 2048 receivers and one chunk of 1024 (goal < 2 KB per receiver).
+
 Run from the repository root::
 
     python benchmarks/bench_objectspace.py            # up to 40962 disks, a few minutes
@@ -45,6 +54,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _benc
 import _bench  # noqa: E402
 from _bench import Timing, interleaved, peak_bytes  # noqa: E402
 from vobscure.objectspace import bunnell, shadow_evaluations  # noqa: E402
+from vobscure.objectspace import sphere_set_ao  # noqa: E402
 
 #: icosphere subdivisions: 10 * 4^s + 2 vertices
 FULL_SUBDIVISIONS = (3, 4, 5, 6)
@@ -123,9 +133,66 @@ def bench_bunnell(args, report: Report):
                 unit=" B")
 
 
-# Another section goes here as ``bench_<name>(args, report)`` and one entry of SECTIONS, e.g.
-# ``bench_spheres`` for the sphere sets of Ren et al. 2006 (issue 15).
-SECTIONS = {"bunnell": bench_bunnell}
+# --------------------------------------------------------------------------- sphere sets
+#: Sphere counts of the ``spheres`` section (Ren et al. 2006, issue 15).
+SPHERE_COUNTS = {False: (1, 2, 4, 8, 16, 32, 64, 128, 256), True: (1, 4, 16, 64)}
+#: SH orders timed (order n = n^2 coefficients).
+SPHERE_ORDERS = {False: (4, 6), True: (4,)}
+#: Receivers per timed call.
+SPHERE_POINTS = {False: 2048, True: 256}
+#: Receivers of the peak-memory measurement (order 6; two chunks of 1024) and the goal per
+#: receiver; spheres: 256 (64 with ``--quick``).
+SPHERE_MEMORY_POINTS = 2048
+SPHERE_MEMORY_SPHERES = {False: 256, True: 64}
+SPHERE_MEMORY_GOAL = 2048
+
+
+def sphere_inputs(count: int, points: int, seed: int = 0):
+    """Receivers on the plane z = 0 (normals +z) under ``count`` spheres in the slab
+    z in [0.3, 1.2], radii 0.5 count^(-1/3) (the same total volume at every count)."""
+    rng = np.random.default_rng(seed)
+    c = np.column_stack([rng.uniform(-1, 1, count), rng.uniform(-1, 1, count), rng.uniform(0.3, 1.2, count)])
+    r = 0.5 * count ** (-1.0 / 3.0) * rng.uniform(0.6, 1.0, count)
+    p = np.column_stack([rng.uniform(-1.3, 1.3, points), rng.uniform(-1.3, 1.3, points), np.zeros(points)])
+    return p, np.tile([0.0, 0.0, 1.0], (points, 1)), c, r
+
+
+def bench_spheres(args, report: Report):
+    """Ren et al.'s sphere sets: time per receiver against the number of spheres, product
+    against shexp (and sum), and peak memory per receiver at order 6."""
+    points = SPHERE_POINTS[args.quick]
+    print(f"\n== spheres: sphere_set_ao per receiver ({points} receivers), product vs shexp (hybrid) vs sum")
+    print(f"  {'order':>5} {'spheres':>7} {'product us':>10} {'shexp us':>9} {'sum us':>8} {'cores':>5} "
+          f"{'product/shexp':>13}")
+    ratios = {}
+    for order in SPHERE_ORDERS[args.quick]:
+        for count in SPHERE_COUNTS[args.quick]:
+            p, n, c, r = sphere_inputs(count, points)
+            t = interleaved({m: (lambda m=m: sphere_set_ao(p, n, c, r, order=order, method=m))
+                             for m in ("product", "shexp", "sum")}, args.repeats, statistic="median")
+            us = {m: 1e6 * t[m].seconds / points for m in t}
+            ratios[order, count] = us["product"] / us["shexp"]
+            print(f"  {order:5d} {count:7d} {us['product']:10.2f} {us['shexp']:9.2f} {us['sum']:8.2f} "
+                  f"{t['shexp'].cores:5.2f} {ratios[order, count]:13.2f}")
+    for order in SPHERE_ORDERS[args.quick]:
+        counts = [k for o, k in ratios if o == order]
+        report.note(f"spheres: product / shexp time, order {order}, {counts[-1]} spheres", ratios[order, counts[-1]])
+        report.note(f"spheres: largest product / shexp, order {order}", max(ratios[order, k] for k in counts))
+    k = SPHERE_MEMORY_SPHERES[args.quick]
+    p, n, c, r = sphere_inputs(k, SPHERE_MEMORY_POINTS)
+    for method in ("shexp", "product", "sum"):
+        sphere_set_ao(p[:8], n[:8], c, r, order=6, method=method)          # tables built, untimed
+        peak = peak_bytes(lambda: sphere_set_ao(p, n, c, r, order=6, method=method))
+        report.goal(f"spheres: peak B per receiver, {method}, order 6, {k} spheres",
+                    peak / SPHERE_MEMORY_POINTS, SPHERE_MEMORY_GOAL, at_least=False, unit=" B")
+    p, n, c, r = sphere_inputs(k, 1024)
+    peak = peak_bytes(lambda: sphere_set_ao(p, n, c, r, order=6, method="shexp"))
+    report.goal("spheres: the same, shexp, 1024 receivers (one chunk)", peak / 1024, SPHERE_MEMORY_GOAL,
+                at_least=False, unit=" B")
+
+
+# Another section goes here as ``bench_<name>(args, report)`` and one entry of SECTIONS.
+SECTIONS = {"bunnell": bench_bunnell, "spheres": bench_spheres}
 
 
 def main(argv=None) -> int:
