@@ -202,7 +202,8 @@ def proxy_rows(quick: bool = False, *, seed: int = 0, images: bool = False):
     -------
     rows : list of dict
         target, k, method ("shexp", "product", "union"), order, points, rmse, bias, corr,
-        ref_stderr, spheres_volume_ratio (the spheres' summed volume over the mesh's).
+        ref_stderr, spheres_volume_ratio (the spheres' summed volume over the mesh's; overlaps
+        count more than once, so it can exceed 1).
     images : dict, only when ``images=True``
         target -> {"truth": (n, n), k: {method: (n, n)}} with NaN where a point is inside.
     """
