@@ -28,7 +28,7 @@ from ..objectspace import TERMS, bunnell, bunnell_gbuffer, vertex_disks
 from ..scenes import get as get_scene
 from ..scenes import load
 
-__all__ = ["SCENES", "VARIANTS", "BUNNY", "scene_for", "objectspace_rows", "main"]
+__all__ = ["SCENES", "VARIANTS", "BUNNY", "scene_for", "objectspace_rows", "tree_rows", "main"]
 
 #: Scenes measured: name -> ``max_edge`` given to the disks (the Cornell box's walls are
 #: 8-vertex boxes, subdivided; the blob and the bunny are fine meshes already).
@@ -97,6 +97,35 @@ def objectspace_rows(scenes=tuple(SCENES), *, terms=TERMS, quick: bool = False, 
     return rows
 
 
+def tree_rows(scenes=tuple(SCENES), *, terms=TERMS, receivers: int = 1000, passes=(1, 2), seed: int = 0,
+              open_ratio: float = 4.0) -> list[dict]:
+    """The tree against the exact sum: per (scene, term, pass), the largest and the RMS
+    difference of the visibility at ``receivers`` random disks, and the shadow evaluations
+    of one pass as a fraction of the exact sum's."""
+    from ..objectspace import shadow_evaluations
+
+    rows = []
+    for name in scenes:
+        scene = scene_for(name)
+        if scene is None:
+            continue
+        max_edge = SCENES.get(name)
+        p, n, _ = vertex_disks(scene, max_edge=max_edge)
+        pick = np.random.default_rng(seed).choice(len(p), size=min(receivers, len(p)), replace=False)
+        fraction = shadow_evaluations(scene, p[pick], n[pick], max_edge=max_edge, open_ratio=open_ratio) / (
+            len(pick) * len(p))
+        for term in terms:
+            for P in passes:
+                opts = dict(passes=P, term=term, max_edge=max_edge)
+                tree = bunnell(scene, p[pick], n[pick], open_ratio=open_ratio, **opts)
+                exact = bunnell(scene, p[pick], n[pick], hierarchy=False, **opts)
+                d = tree - exact
+                rows.append({"scene": name, "disks": len(p), "receivers": len(pick), "term": term, "passes": P,
+                             "max_abs": float(np.abs(d).max()), "rmse": float(np.sqrt(np.mean(d ** 2))),
+                             "mean_diff": float(d.mean()), "evaluations": fraction})
+    return rows
+
+
 def main(argv=None) -> int:
     """``python -m vobscure.experiments.objectspace [--quick]``: the table."""
     import argparse
@@ -108,7 +137,15 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="few receivers and rays (under a minute)")
     parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated: " + ", ".join(SCENES))
     parser.add_argument("--terms", default=",".join(TERMS), help="comma-separated: " + ", ".join(TERMS))
+    parser.add_argument("--tree", action="store_true",
+                        help="instead: the tree against the exact sum at 1000 random disks (passes 1, 2)")
     args = parser.parse_args(argv)
+    if args.tree:
+        print(markdown_table(tree_rows([s.strip() for s in args.scenes.split(",")],
+                                       terms=[t.strip() for t in args.terms.split(",")]),
+                             ["scene", "disks", "receivers", "term", "passes", "max_abs", "rmse", "mean_diff",
+                              "evaluations"], digits=3))
+        return 0
     rows = objectspace_rows([s.strip() for s in args.scenes.split(",")],
                             terms=[t.strip() for t in args.terms.split(",")], quick=args.quick)
     if not BUNNY.exists() and "bunny" in args.scenes:

@@ -133,8 +133,12 @@ def disk_shadow(receivers, receiver_normals, emitters, emitter_normals, emitter_
     ...                 term="solid_angle")
     >>> round(float(S[0, 0]), 6)  # a unit-radius disk at distance 1: 1 - 1/sqrt(2)
     0.292893
-    >>> float(disk_shadow([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 1]], [[0, 0, -1]], [np.pi])[0, 0])
+    >>> float(disk_shadow([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 1]], [[0, 0, -1]], [np.pi],
+    ...                   term="form_factor")[0, 0])  # a^2 / (d^2 + a^2)
     0.5
+    >>> S = disk_shadow([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 1], [0, 0, 1]], [[0, 0, 1], [0, 0, -1]], [np.pi] * 2)
+    >>> S.round(6).tolist()  # "gpugems": only the disk whose back faces the receiver casts
+    [[0.292893, 0.0]]
     """
     term = check_choice(term, "term", TERMS)
     p_R = as_points(receivers, "receivers")
@@ -255,6 +259,13 @@ def bunnell(scene, points=None, normals=None, *, passes: int = 2, term: str = DE
     (n,) float64
         Visibility in [0, 1]: per vertex (of the subdivided meshes with ``max_edge``) when
         ``points`` is None, else per point.
+
+    Notes
+    -----
+    With a :class:`~vobscure.scenes.Scene` object, the disks, the tree and the per-vertex
+    passes are kept while the scene lives (per ``max_edge``, term and tree options) and
+    shared with :func:`bunnell_gbuffer`: calls with other receivers or more passes reuse
+    them. A mesh or a path is converted afresh on every call and nothing is kept.
 
     References
     ----------
