@@ -28,7 +28,7 @@ from ..objectspace import TERMS, bunnell, bunnell_gbuffer, vertex_disks
 from ..scenes import get as get_scene
 from ..scenes import load
 
-__all__ = ["SCENES", "VARIANTS", "BUNNY", "scene_for", "objectspace_rows", "tree_rows", "main"]
+__all__ = ["SCENES", "VARIANTS", "BUNNY", "scene_for", "objectspace_rows", "tree_rows", "contact_rows", "main"]
 
 #: Scenes measured: name -> ``max_edge`` given to the disks (the Cornell box's walls are
 #: 8-vertex boxes, subdivided; the blob and the bunny are fine meshes already).
@@ -126,6 +126,25 @@ def tree_rows(scenes=tuple(SCENES), *, terms=TERMS, receivers: int = 1000, passe
     return rows
 
 
+def contact_rows(*, terms=TERMS, rays: int = 64, seed: int = 0) -> list[dict]:
+    """Where surfaces touch: the Cornell box's disks (``max_edge="auto"``) in the plane where
+    the right wall stands on the floor (the floor's top-face disks under the wall, the
+    wall's bottom-face disks on the floor), pass 1 of every term against uniform AO."""
+    scene = get_scene("cornell_box")
+    p, n, _ = vertex_disks(scene, max_edge="auto")
+    under = (np.abs(p[:, 1]) < 1e-9) & (p[:, 0] > 1.01) & (p[:, 0] < 1.09) & (np.abs(p[:, 2]) < 0.9)
+    rows = []
+    for where, facing in (("floor under the wall", n[:, 1] > 0.99), ("wall's bottom face", n[:, 1] < -0.99)):
+        pick = np.flatnonzero(under & facing)
+        ref = ambient_occlusion(scene, p[pick], n[pick], rays=rays, weighting="uniform", max_distance=np.inf,
+                                seed=seed)
+        row = {"disks": where, "count": len(pick), "ray-cast": float(ref.value.mean())}
+        for term in terms:
+            row[term] = float(bunnell(scene, p[pick], n[pick], passes=1, term=term, max_edge="auto").mean())
+        rows.append(row)
+    return rows
+
+
 def main(argv=None) -> int:
     """``python -m vobscure.experiments.objectspace [--quick]``: the table."""
     import argparse
@@ -139,7 +158,12 @@ def main(argv=None) -> int:
     parser.add_argument("--terms", default=",".join(TERMS), help="comma-separated: " + ", ".join(TERMS))
     parser.add_argument("--tree", action="store_true",
                         help="instead: the tree against the exact sum at 1000 random disks (passes 1, 2)")
+    parser.add_argument("--contact", action="store_true",
+                        help="instead: the Cornell box's disks where a wall stands on the floor")
     args = parser.parse_args(argv)
+    if args.contact:
+        print(markdown_table(contact_rows(terms=[t.strip() for t in args.terms.split(",")]), digits=3))
+        return 0
     if args.tree:
         print(markdown_table(tree_rows([s.strip() for s in args.scenes.split(",")],
                                        terms=[t.strip() for t in args.terms.split(",")]),
