@@ -208,15 +208,6 @@ def test_chunking_does_not_change_the_result(method):
                                   sphere_set_ao(p, n, c, r, method=method))
 
 
-def test_product_of_disjoint_small_spheres_is_close_to_union():
-    """Few, small, separated spheres: the band-limited product is near the exact union (the
-    gap is the band limit, below 0.02 here), and shexp near the product."""
-    p, n, c, r = _cloud(k=6)
-    exact = union_visibility(p, n, c, r, rays=512, seed=0)
-    product = sphere_set_ao(p, n, c, r, order=6, method="product")
-    assert np.max(np.abs(product - exact.value)) < 0.02 + Z_MAX * exact.stderr.max()
-
-
 @pytest.mark.parametrize("method", METHODS)
 def test_float32_inputs(method):
     p, n, c, r = _cloud(points=10)
