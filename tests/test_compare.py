@@ -277,3 +277,14 @@ def test_verdict_decomposes_only_vo_estimators_and_recommends_only_real_gains():
                    seconds=0.006, baseline_rmse=0.0217) for f, e in ((0.25, 0.31), (2.0, 0.02169))]
     text = " ".join(C.verdict(rows, thickness_trials=trials)["text"])
     assert "no thickness beats none" in text and "Use --thickness" not in text
+
+
+def test_verdict_calls_a_poor_best_a_poor_fit():
+    # the best of ROWS (0.20) is at the threshold: nothing called out
+    assert not any("poor fit" in s for s in C.verdict(ROWS)["text"])
+    worse = [_r("line:9", 0.006, 9, 0.33), _r("ren:1", 0.02, 0, 0.66, ref="sky")]
+    text = {s.split(":")[0]: s for s in C.verdict(worse)["text"]}
+    vo_text = next(s for s in text.values() if "world-space VO" in s)
+    sky_text = next(s for s in text.values() if "ray-cast sky" in s)
+    assert "poor fit: even the best is off by 0.33" in vo_text and "error split below" in vo_text
+    assert "poor fit: even the best is off by 0.66" in sky_text and "object-space model" in sky_text

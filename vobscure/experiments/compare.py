@@ -57,6 +57,9 @@ QUICK_SIZE = (64, 64)
 METRICS = ("rmse", "mae", "bias", "ssim")
 #: Default target RMSE: the best configuration's error times this factor.
 TARGET_FACTOR = 1.5
+#: A best RMSE above this (a fifth of the visibility range) is called out in the verdict as a
+#: poor fit rather than reported as if it were a good choice.
+POOR_RMSE = 0.2
 #: Thicknesses (fractions of the radius) tried when the screen-space error dominates.
 SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
 #: A thickness is recommended only when it lowers the RMSE by at least this fraction.
@@ -480,6 +483,12 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
         by_label = {r["label"]: r for r in sel}
         lines = [f"Against {what} at R = {radius:.4g}: the most accurate is {best['label']} "
                  f"(RMSE {best[col]:.4f}, {_ms(best['seconds'])}, {best['taps_per_pixel']} taps/px)."]
+        if best[col] > POOR_RMSE:
+            lines.append(f"That is a poor fit: even the best is off by {best[col]:.2f} on a visibility range of 1, "
+                         f"so no configuration here estimates this reference well on this scene"
+                         + (" (an object-space model whose proxy does not fit the geometry: see its page in the "
+                            "docs)." if best["taps_per_pixel"] == 0 else "; the error split below says why."
+                            if ref == "volumetric" else "."))
         for name, unit in (("time", "time"), ("taps", "taps per pixel")):
             cheap = g[f"cheapest_{name}"]
             if cheap is None:
