@@ -81,8 +81,10 @@ TABLE_ERROR = 2e-3
 #: scene's, ``leaf_cloud_dense``, 3.1); beyond it the error inside the sphere grows with the
 #: steepness of V just below the surface.
 TABLE_SIGMA_R_MAX = 32.0
-#: Points evaluated at once by :func:`poisson_visibility`.
-DEFAULT_CHUNK = 1 << 16
+#: Points evaluated at once by :func:`poisson_visibility`: its temporaries are about 190 bytes
+#: per point of a chunk (the affine map, the interpolation's indices and weights), so 16384
+#: points keep them near 3 MB, under 100 bytes per point from 32768 points on.
+DEFAULT_CHUNK = 1 << 14
 #: Normals shorter than this are rejected (they have no direction).
 ZERO_NORMAL = 1e-12
 #: Floor of |m| |x| in the division that gives u (only the centre, where n.x = 0, reaches it).
@@ -312,15 +314,22 @@ def _table(weighting: str) -> tuple[np.ndarray, np.ndarray]:
     return L, W
 
 
+#: How many sums of the table (one per sigma R and weighting, 67 kB each) stay cached.
+GRID_CACHE = 64
+
+
+@lru_cache(maxsize=GRID_CACHE)
 def _occlusion_grid(s: float, weighting: str) -> np.ndarray:
-    """The table at sigma R = s: the absorbed fraction at each node, flat (N_a * N_u,)."""
+    """The table at sigma R = s: the absorbed fraction at each node, flat (N_a * N_u,),
+    read-only. Cached for the last :data:`GRID_CACHE` values of (s, weighting): a frame's
+    pixels, a sweep's configurations and a benchmark's repeats share one sigma R."""
     L, W = _table(weighting)
     grid = np.zeros(L.shape[0])
-    if s == 0:
-        return grid
-    for start in range(0, L.shape[0], _GRID_BLOCK):        # blocks: the temporaries stay small
-        sl = slice(start, start + _GRID_BLOCK)
-        grid[sl] = np.einsum("ij,ij->i", W[sl], _absorbed(s, L[sl]))
+    if s != 0:
+        for start in range(0, L.shape[0], _GRID_BLOCK):    # blocks: the temporaries stay small
+            sl = slice(start, start + _GRID_BLOCK)
+            grid[sl] = np.einsum("ij,ij->i", W[sl], _absorbed(s, L[sl]))
+    grid.setflags(write=False)
     return grid
 
 
