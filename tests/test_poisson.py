@@ -285,3 +285,21 @@ def test_validation_errors_name_the_argument():
         sphere_transmittance(x, n, s, extinction=1.0, quadrature=0)
     with pytest.raises(ValueError, match="shell"):
         poisson_quadrature(x, n, MultiShell([s]), extinction=1.0)
+
+
+def test_cached_table_sums_are_read_only_and_reused():
+    # the sum of the table per sigma R is cached: a later call at another sigma must not
+    # change an earlier one's, and chunking must not change any value
+    from vobscure.trees import poisson as P
+
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1.5, 1.5, (5000, 3))
+    n = rng.normal(size=(5000, 3))
+    shell = Sphere((0.0, 0.0, 0.0), 1.0)
+    first = poisson_visibility(x, n, shell, extinction=1.3)
+    poisson_visibility(x, n, shell, extinction=0.4)
+    again = poisson_visibility(x, n, shell, extinction=1.3, chunk=777)
+    assert np.array_equal(first, again)
+    grid = P._occlusion_grid(1.3, "cosine")
+    assert not grid.flags.writeable
+    assert P._occlusion_grid(1.3, "cosine") is grid
