@@ -4,7 +4,7 @@
   written by several changes at once: a nav entry whose file does not exist would fail
   ``mkdocs build --strict``, and a page left out of the nav would be unreachable. So the
   entries whose file is missing are dropped, and every other Markdown page of the docs
-  folder is appended under "More".
+  folder (but the run reports under ``img/``) is appended under "More".
 - ``SphinxMarkup``, a griffe extension used by mkdocstrings, turns the Sphinx markup of the
   numpydoc docstrings into Markdown, their mathematics into the ``$...$`` / ``$$...$$`` that
   pymdownx.arithmatex hands to the site's KaTeX (mkdocs.yml).
@@ -44,7 +44,9 @@ def on_config(config, **kwargs):
     listed: set = set()
     nav = _prune(config["nav"], docs, listed)
     extra = sorted(p.relative_to(docs).as_posix() for p in docs.rglob("*.md"))
-    extra = [p for p in extra if p not in listed]
+    # the reports that `vobscure compare` writes next to its images (docs/img/**/results.md)
+    # are reached from the pages that cite them, not from the nav
+    extra = [p for p in extra if p not in listed and not p.startswith("img/")]
     if extra:
         nav.append({"More": extra})
     config["nav"] = nav
