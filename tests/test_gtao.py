@@ -275,3 +275,20 @@ def test_bent_normals_converge_on_the_crease(crease_view):
         gtao_bent_normals(gb, radius=0.5, slices=0)
     with pytest.raises(ValueError, match="radius"):
         gtao_bent_normals(gb, radius=-1.0)
+
+
+def test_step_jitter_r1_is_xegtaos_and_optional(crease_view):
+    gb, _, _ = crease_view
+    pixel = gtao(gb, radius=0.5, seed=3)
+    assert pixel.tobytes() == gtao(gb, radius=0.5, seed=3, step_jitter="pixel").tobytes()
+    r1 = gtao(gb, radius=0.5, seed=3, step_jitter="r1")
+    valid = gb.valid
+    assert not np.array_equal(r1[valid], pixel[valid])          # the slices sample other radii
+    assert np.all((r1[valid] >= 0) & (r1[valid] <= 1))
+    # without randomization there is no jitter to advance: both are the midpoint rule
+    assert gtao(gb, radius=0.5, randomize=False, step_jitter="r1").tobytes() == \
+        gtao(gb, radius=0.5, randomize=False).tobytes()
+    with pytest.raises(ValueError, match="step_jitter"):
+        gtao(gb, radius=0.5, step_jitter="golden")
+    with pytest.raises(ValueError, match="step_jitter"):
+        gtao_bent_normals(gb, radius=0.5, step_jitter="R1")

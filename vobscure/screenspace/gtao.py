@@ -25,6 +25,10 @@ __all__ = ["gtao", "gtao_bent_normals", "PRESETS"]
 #: XeGTAO's quality presets: name -> (slices, steps per side). Taps per pixel: 2 x slices x steps.
 PRESETS = {"low": (1, 2), "medium": (2, 2), "high": (3, 3), "ultra": (9, 3)}
 
+#: The R1 (golden-ratio) increment of XeGTAO's per-slice, per-step jitter (``step_jitter="r1"``).
+R1_STEP = 0.6180339887498948
+#: The step jitters :func:`gtao` offers.
+STEP_JITTERS = ("pixel", "r1")
 #: XeGTAO's sample distribution: step j of n reaches ((j + u) / n) ** 2 of the radius
 #: (denser near the centre, where small occluders matter most).
 SAMPLE_DISTRIBUTION_POWER = 2.0
@@ -42,7 +46,7 @@ def _inner_integral(h, gamma, sin_g, cos_g):
 def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_range: float = 0.0,
          thin_occluder: float = 0.0, power: float = 1.0, normal_fudge: float = 0.0,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-         noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
     """Cosine-weighted ambient occlusion within ``radius`` by horizon search (GTAO).
 
     For each pixel (view-space point p, normal n, view vector v from p to the camera),
@@ -101,6 +105,12 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
         (``"clamp"``, default) or empty space (``"open"``, ignored).
     noise_size : int, optional
         Edge of the tiled noise texture in pixels (>= 1, default 4).
+    step_jitter : {"pixel", "r1"}, optional
+        ``"pixel"`` (default): one step jitter u per pixel, shared by its slices. ``"r1"``:
+        XeGTAO's, u advanced along the R1 (golden-ratio) sequence by slice + step * steps, so
+        that a pixel's slices sample different radii. Both unbiased; without a denoiser
+        ``"r1"`` measured slightly worse per frame (docs/screenspace.md, "GTAO"). Unused with
+        ``randomize=False``.
 
     Returns
     -------
@@ -163,7 +173,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     radius = C.check_positive(radius, "radius")
     options = _check(slices=slices, steps=steps, falloff_range=falloff_range, thin_occluder=thin_occluder,
                      power=power, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
-                     offscreen=offscreen, noise_size=noise_size)
+                     offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
     texture = C.noise_texture(noise_size, seed, 3, randomize)
@@ -174,7 +184,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
 def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3,
                       falloff_range: float = 0.0, thin_occluder: float = 0.0, normal_fudge: float = 0.0,
                       randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-                      noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+                      noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
     """View-space bent normals from the GTAO horizons (Jimenez et al. 2016).
 
     The same horizon search as :func:`gtao` (same arguments and defaults, same seed -> same
@@ -185,7 +195,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
     Parameters
     ----------
-    gbuffer, radius, slices, steps, falloff_range, thin_occluder, normal_fudge, randomize, seed, fetch, offscreen, noise_size
+    gbuffer, radius, slices, steps, falloff_range, thin_occluder, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
         As in :func:`gtao` (``power`` does not apply to a direction).
 
     Returns
@@ -213,7 +223,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
     radius = C.check_positive(radius, "radius")
     options = _check(slices=slices, steps=steps, falloff_range=falloff_range, thin_occluder=thin_occluder,
                      power=1.0, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
-                     offscreen=offscreen, noise_size=noise_size)
+                     offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
     texture = C.noise_texture(noise_size, seed, 3, randomize)
     gb, depth64, index = C.frame(gbuffer, radius)
     H, W = gb.depth.shape
@@ -228,7 +238,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
 
 def _check(*, slices, steps, falloff_range, thin_occluder, power, normal_fudge, randomize, fetch, offscreen,
-           noise_size):
+           noise_size, step_jitter):
     """Validate the arguments shared by :func:`gtao` and :func:`gtao_bent_normals`."""
     options = dict(slices=C.check_int(slices, "slices"), steps=C.check_int(steps, "steps"),
                    falloff_range=_fraction(falloff_range, "falloff_range"),
@@ -237,6 +247,9 @@ def _check(*, slices, steps, falloff_range, thin_occluder, power, normal_fudge, 
                    normal_fudge=_fraction(normal_fudge, "normal_fudge"), fetch=fetch, offscreen=offscreen)
     if not isinstance(randomize, (bool, np.bool_)):
         raise ValueError(f"randomize must be True or False, got {randomize!r}")
+    if step_jitter not in STEP_JITTERS:
+        raise ValueError(f"step_jitter must be one of {', '.join(STEP_JITTERS)}, got {step_jitter!r}")
+    options["r1_jitter"] = step_jitter == "r1"
     C.check_common(fetch=fetch, offscreen=offscreen, noise_size=noise_size)
     return options
 
@@ -249,7 +262,7 @@ def _fraction(value, name):
 
 
 def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, power, normal_fudge, fetch,
-                 offscreen, texture, bent=False):
+                 offscreen, texture, r1_jitter=False, bent=False):
     """GTAO of one chunk of pixels (see :func:`gtao`): loops over slices and steps only.
 
     Returns the (k,) visibility, or with ``bent`` the (k, 3) unnormalized bent normal."""
@@ -308,8 +321,12 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
             length_px = np.sqrt(ox * ox + oy * oy)
             min_s = PIXEL_TOO_CLOSE / length_px
             for j in range(steps):
-                # XeGTAO's sample distribution: ((j + u) / steps) ** 2, plus the minimum offset
-                t = ((j + u_step) / steps) ** SAMPLE_DISTRIBUTION_POWER + min_s
+                # the step jitter: the pixel's own, or with r1_jitter XeGTAO's, advanced along
+                # the R1 sequence by (slice + step * steps) golden-ratio steps (XeGTAO.hlsli,
+                # XeGTAO_MainPass); then XeGTAO's distribution ((j + u) / steps) ** 2 plus the
+                # minimum offset
+                u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and noise is not None) else u_step
+                t = ((j + u) / steps) ** SAMPLE_DISTRIBUTION_POWER + min_s
                 for side, sign in ((0, 1.0), (1, -1.0)):
                     dj = sign * t * ox
                     de = sign * t * oy                   # rows up
