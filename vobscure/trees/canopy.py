@@ -1,17 +1,19 @@
-"""Ambient visibility inside a tree's canopy: Hegeman et al. 2006, Sec. 3 (Eqs. 4-6).
+r"""Ambient visibility inside a tree's canopy: Hegeman et al. 2006, Sec. 3 (Eqs. 4-6).
 
-A point x with normal n inside a shell of occluders: the plane through x with normal n cuts
-off a spherical cap of height h on the normal's side; the visibility is the probability of
-seeing no occluder in a Poisson field whose mean count is the cap's volume times the density,
-reduced by the off-centre factor f:
+A point :math:`x` with normal :math:`n` inside a shell of occluders: the plane through
+:math:`x` with normal :math:`n` cuts off a spherical cap of height :math:`h` on the normal's
+side; the visibility is the probability of seeing no occluder in a Poisson field whose mean
+count is the cap's volume times the density, reduced by the off-centre factor :math:`f`:
 
-    V_cap = pi h^2 (3R - h) / 3             (Eq. 4)
-    f     = h^2 / (h^2 + d^2)               (Eq. 5)
-    V     = exp(-alpha rho f V_cap)         (Eq. 6)
+.. math::
+
+    V_{cap} = \frac{\pi h^2 (3R - h)}{3} \quad \text{(Eq. 4)}, \qquad
+    f = \frac{h^2}{h^2 + d^2} \quad \text{(Eq. 5)}, \qquad
+    V = e^{-\alpha \rho f V_{cap}} \quad \text{(Eq. 6)}
 
 Ellipsoids are mapped to the unit sphere first (points directly, normals by the inverse
 transpose). Also here: the Reeves & Blau 1985 baseline the paper compares with, the density
-alpha*rho fitted to a reference visibility (the "one-time preprocessing step" of Sec. 4), and
+:math:`\alpha\rho` fitted to a reference visibility (the "one-time preprocessing step" of Sec. 4), and
 the density predicted from leaf statistics by the Poisson argument of Sec. 3 (derived in
 ``docs/trees.md``).
 """
@@ -156,7 +158,7 @@ def optical_depth(points, normals, shell, *, chunk: int = DEFAULT_CHUNK) -> np.n
 
 
 def canopy_visibility(points, normals, shell, *, density: float, chunk: int = DEFAULT_CHUNK) -> np.ndarray:
-    """Ambient visibility at points of a tree's canopy (Hegeman et al. 2006, Eqs. 4-6).
+    r"""Ambient visibility at points of a tree's canopy (Hegeman et al. 2006, Eqs. 4-6).
 
     Parameters
     ----------
@@ -188,25 +190,28 @@ def canopy_visibility(points, normals, shell, *, density: float, chunk: int = DE
     Notes
     -----
     Computed in the shell's unit frame (the affine map taking the shell to the unit sphere,
-    Sec. 3; a sphere's is ``(x - c) / R``), with R = 1 and c = 0 there:
+    Sec. 3; a sphere's is :math:`(x - c) / R`), with :math:`R = 1` and :math:`c = 0` there:
 
-    - ``h = R - n.(x - c)``, clamped to [0, 2R]: 0 when the plane leaves the shell entirely
-      behind the normal (then V = 1), 2R when the whole shell lies on the normal's side.
-    - ``d`` is the distance from x to the foot of the centre's projection on the plane (the
-      centre of the cutting disk), ``|(x - c) - (n.(x - c)) n|``, never clamped; ``f = 1``
-      when ``h = d = 0``.
-    - Points outside the shell follow the same formulas: V = 1 when the plane misses the shell
-      on the normal's side, otherwise the cap (or the whole shell) attenuated by f, which
-      decreases as x moves away sideways. V is continuous in x.
+    - :math:`h = R - n \cdot (x - c)`, clamped to :math:`[0, 2R]`: 0 when the plane leaves
+      the shell entirely behind the normal (then :math:`V = 1`), :math:`2R` when the whole
+      shell lies on the normal's side.
+    - :math:`d` is the distance from :math:`x` to the foot of the centre's projection on the
+      plane (the centre of the cutting disk), :math:`\lVert (x - c) - (n \cdot (x - c))\, n
+      \rVert`, never clamped; :math:`f = 1` when :math:`h = d = 0`.
+    - Points outside the shell follow the same formulas: :math:`V = 1` when the plane misses
+      the shell on the normal's side, otherwise the cap (or the whole shell) attenuated by
+      :math:`f`, which decreases as :math:`x` moves away sideways. :math:`V` is continuous in
+      :math:`x`.
 
-    **Density of an ellipsoid**: V_cap is computed in the unit frame and multiplied by the
-    ellipsoid's volume scale ``a b c`` (the Jacobian of the map), so V_cap is the cap's true
-    world volume and ``density`` is always per unit world volume; an Ellipsoid with three
-    equal radii gives the Sphere's result. ``f`` is the unit frame's (a ratio, unitless).
+    **Density of an ellipsoid**: :math:`V_{cap}` is computed in the unit frame and multiplied
+    by the ellipsoid's volume scale :math:`a b c` (the Jacobian of the map), so
+    :math:`V_{cap}` is the cap's true world volume and ``density`` is always per unit world
+    volume; an Ellipsoid with three equal radii gives the Sphere's result. :math:`f` is the
+    unit frame's (a ratio, unitless).
 
-    Stability: V_cap is in [0, 4 pi / 3] in the unit frame, so the exponent never overflows
-    for finite shells and densities; ``exp`` of a huge exponent underflows quietly to 0, and
-    ``density = 0`` gives exactly 1.
+    Stability: :math:`V_{cap}` is in :math:`[0, 4\pi/3]` in the unit frame, so the exponent
+    never overflows for finite shells and densities; ``exp`` of a huge exponent underflows
+    quietly to 0, and ``density = 0`` gives exactly 1.
 
     References
     ----------
@@ -231,7 +236,7 @@ def canopy_visibility(points, normals, shell, *, density: float, chunk: int = DE
 
 
 def reeves_blau(points, shell, *, k: float) -> np.ndarray:
-    """The baseline: ambient attenuated exponentially with the depth inside the tree.
+    r"""The baseline: ambient attenuated exponentially with the depth inside the tree.
 
     Parameters
     ----------
@@ -249,10 +254,11 @@ def reeves_blau(points, shell, *, k: float) -> np.ndarray:
 
     Notes
     -----
-    For a sphere, ``depth = max(R - |x - c|, 0)``: the distance from x to the surface inside,
-    0 outside. For an ellipsoid, depth is measured in the frame where the ellipsoid is the
-    sphere of the same volume (the affine map the canopy model uses, scaled by the
-    equivalent radius ``R_eq = (a b c)^(1/3)``): ``depth = R_eq max(1 - |x'|, 0)`` with x' the
+    For a sphere, :math:`\text{depth} = \max(R - \lVert x - c \rVert, 0)`: the distance
+    from :math:`x` to the surface inside, 0 outside. For an ellipsoid, depth is measured in the
+    frame where the ellipsoid is the sphere of the same volume (the affine map the canopy
+    model uses, scaled by the equivalent radius :math:`R_{eq} = (a b c)^{1/3}`):
+    :math:`\text{depth} = R_{eq} \max(1 - \lVert x' \rVert, 0)` with :math:`x'` the
     unit-frame coordinates. It equals the Euclidean depth for a sphere, is continuous and 0
     on the surface; it is not the Euclidean distance to an elongated ellipsoid's surface.
     Reeves & Blau's own depth was likewise a modelling choice (their parameters "are ad hoc",
@@ -291,7 +297,7 @@ def reeves_blau(points, shell, *, k: float) -> np.ndarray:
 
 # ----------------------------------------------------------------------------- density
 def fit_density(points, normals, shell, reference, *, weights=None) -> float:
-    """The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
+    r"""The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
 
     Parameters
     ----------
@@ -306,8 +312,8 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     Returns
     -------
     float
-        The density minimizing ``sum w (exp(-density tau) - reference)^2``, >= 0, with
-        ``tau = optical_depth(points, normals, shell)``.
+        The density minimizing :math:`\sum w \, (e^{-\text{density}\,\tau} -
+        \text{reference})^2`, >= 0, with ``tau = optical_depth(points, normals, shell)``.
 
     Raises
     ------
@@ -392,7 +398,7 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
 
 
 def predict_density(n_leaves: float, leaf_area: float, shell) -> float:
-    """The alpha*rho predicted from leaf statistics by the Poisson argument of Sec. 3.
+    r"""The alpha*rho predicted from leaf statistics by the Poisson argument of Sec. 3.
 
     Parameters
     ----------
@@ -407,16 +413,18 @@ def predict_density(n_leaves: float, leaf_area: float, shell) -> float:
     Returns
     -------
     float
-        ``alpha rho = 3 sigma / (2 pi R^2)`` with ``sigma = n A / 2``, ``n = n_leaves / volume``.
+        :math:`\alpha \rho = \frac{3 \sigma}{2 \pi R^2}` with :math:`\sigma = n A / 2`,
+        :math:`n` = ``n_leaves / volume``.
 
     Notes
     -----
-    Randomly oriented flat leaves of one-sided area A have a mean projected area A / 2
-    (Cauchy's projection formula: a convex body's mean shadow is a quarter of its surface
-    area, here 2A), so the number of leaves crossed along a segment of length L is Poisson
-    with mean ``sigma L``. At the sphere's centre every chord has length R, so the exact
-    transmittance is ``exp(-sigma R)`` in every direction (for any angular weighting); there
-    Eq. 6 has f = 1 and ``V_cap = 2 pi R^3 / 3``. Equating the exponents gives the formula.
+    Randomly oriented flat leaves of one-sided area :math:`A` have a mean projected area
+    :math:`A / 2` (Cauchy's projection formula: a convex body's mean shadow is a quarter of
+    its surface area, here :math:`2A`), so the number of leaves crossed along a segment of
+    length :math:`L` is Poisson with mean :math:`\sigma L`. At the sphere's centre every
+    chord has length :math:`R`, so the exact transmittance is :math:`e^{-\sigma R}` in every
+    direction (for any angular weighting); there Eq. 6 has :math:`f = 1` and
+    :math:`V_{cap} = 2 \pi R^3 / 3`. Equating the exponents gives the formula.
     See ``docs/trees.md`` for the derivation.
 
     References
