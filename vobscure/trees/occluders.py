@@ -162,18 +162,25 @@ def sphere_occlusion(distance, radius, cos_theta, *, weighting: str = "cosine") 
 
     Notes
     -----
-    With sin(alpha) = r / d the sine of the cap's half-angle, three cases:
+    With :math:`\sin\alpha = r / d` the sine of the cap's half-angle, three cases:
 
-    - the cap wholly above the horizon (cos theta >= r/d): the form factor
-      (r/d)^2 cos theta, the solid angle 2 pi (1 - sqrt(1 - (r/d)^2));
-    - wholly below (cos theta <= -r/d): 0;
-    - cut by the horizon: with x = cot alpha and y = -x cot theta, the form factor
-      [(cos theta acos y - x sin theta sqrt(1 - y^2)) (r/d)^2 + atan(sin theta sqrt(1 - y^2) / x)] / pi
+    - the cap wholly above the horizon (:math:`\cos\theta \ge r/d`): the form factor
+      :math:`(r/d)^2 \cos\theta`, the solid angle :math:`2\pi \left(1 - \sqrt{1 - (r/d)^2}\right)`;
+    - wholly below (:math:`\cos\theta \le -r/d`): 0;
+    - cut by the horizon: with :math:`x = \cot\alpha` and :math:`y = -x \cot\theta`, the form
+      factor
+
+      .. math::
+
+          \frac{1}{\pi} \left[\left(\cos\theta \arccos y - x \sin\theta \sqrt{1 - y^2}\right)
+          \left(\frac{r}{d}\right)^2 + \arctan\frac{\sin\theta \sqrt{1 - y^2}}{x}\right]
+
       (Snyder 1996; Lagarde & de Rousiers 2014, Sec. 4.7.2, give the same expression for
       a spherical light partly below the horizon) and the solid angle
-      2 [pi - acos(cos theta / sin alpha) - cos alpha acos y]: the intersection of the cap with
-      the hemisphere, two caps of half-angles alpha and pi/2 at angle theta (Mazonka 2012,
-      Sec. 4; Tovchigrechko & Vakser 2001).
+      :math:`2 \left[\pi - \arccos\frac{\cos\theta}{\sin\alpha} - \cos\alpha \arccos y\right]`:
+      the intersection of the cap with the hemisphere, two caps of half-angles :math:`\alpha`
+      and :math:`\pi/2` at angle :math:`\theta` (Mazonka 2012, Sec. 4; Tovchigrechko & Vakser
+      2001).
 
     Both partial forms are checked in ``tests/test_occluders.py`` against an independent
     adaptive quadrature over the hemisphere (to 1e-9) and against ray casting of an
@@ -269,38 +276,47 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     **Several spheres** combine as the product of the per-sphere visibilities, which assumes
     independent occluders: exact for the porous transmittance along one direction, not
     after the angular integration, and for opaque spheres the product counts the overlap of
-    two caps as F1 F2 instead of its true weight. ``docs/trees.md`` ("Occluders and grass")
+    two caps as :math:`F_1 F_2` instead of its true weight. ``docs/trees.md`` ("Occluders and grass")
     measures what this costs against ray casting of the union.
 
-    **hegeman** (Eqs. 7-8): A_SA = pi (r/d)^2, V = 1 - A_SA / (2 pi). r/d is clamped to 1
-    on and inside the sphere (d <= r), so A_SA -> pi and V -> 1/2 as d -> r and V = 1/2
-    inside (the paper's formula, continued as a constant; no NaN at d = 0). Eq. 7 ignores
-    the normal; the one addition here is that a sphere wholly below the point's horizon
-    (cos theta <= -r/d) hides nothing (V = 1). Everywhere else this is Eqs. 7-8 exactly.
-    Eq. 7 is the small-angle limit of the solid angle 2 pi (1 - sqrt(1 - (r/d)^2)), which
-    it underestimates (by half at d = r).
+    **hegeman** (Eqs. 7-8): :math:`A_{SA} = \pi (r/d)^2`, :math:`V = 1 - A_{SA} / (2\pi)`.
+    :math:`r/d` is clamped to 1 on and inside the sphere (:math:`d \le r`), so
+    :math:`A_{SA} \to \pi` and :math:`V \to 1/2` as :math:`d \to r` and :math:`V = 1/2`
+    inside (the paper's formula, continued as a constant; no NaN at :math:`d = 0`). Eq. 7
+    ignores the normal; the one addition here is that a sphere wholly below the point's
+    horizon (:math:`\cos\theta \le -r/d`) hides nothing (:math:`V = 1`). Everywhere else this
+    is Eqs. 7-8 exactly. Eq. 7 is the small-angle limit of the solid angle
+    :math:`2\pi \left(1 - \sqrt{1 - (r/d)^2}\right)`, which it underestimates (by half at
+    :math:`d = r`).
 
-    **exact**: V = 1 - :func:`sphere_occlusion`, closed forms including a sphere cut by the
-    horizon. A point inside the sphere (d < r) has V = 0; on the surface (d = r) the limit
-    from outside, e.g. (1 - cos theta) / 2 with the cosine weight (0 for a normal facing
-    the centre, 1 facing away).
+    **exact**: :math:`V = 1 -` :func:`sphere_occlusion`, closed forms including a sphere cut
+    by the horizon. A point inside the sphere (:math:`d < r`) has :math:`V = 0`; on the
+    surface (:math:`d = r`) the limit from outside, e.g. :math:`(1 - \cos\theta) / 2` with
+    the cosine weight (0 for a normal facing the centre, 1 facing away).
 
-    **porous**: V = 1 - int w(omega) (1 - exp(-sigma L(omega))) d omega over the hemisphere,
-    L the chord of the ray in the sphere (from the point to the exit when the point is
-    inside), evaluated by :func:`vobscure.trees.poisson.sphere_transmittance`. The integral
-    is over the cap of directions that meet the sphere, in the angle psi from the direction
-    to the centre (the chord depends on psi only) and the azimuth about it, whose integral
-    over the arc above the horizon is done in closed form; the remaining integral in psi is
-    split at the two angles where the arc meets the horizon and each piece is integrated by
-    ``quadrature``-point Gauss-Legendre after the substitution psi = a + (b - a)(1 - cos
-    t)/2, which removes the square-root behaviour of the chord at the cap's edge and of the
-    arc at the splits (a third split at psi = pi/2 for a point inside the sphere). Its error
-    with the default 16 nodes is below ``POROUS_QUADRATURE_ERROR`` = 1e-6 (measured; 4e-8
-    outside the sphere). sigma = 0 gives 1, sigma = inf the "exact" model. The density of
-    Eq. 6, alpha*rho, converts as ``sigma = 2 pi R^2 alpha_rho / 3``: the inverse of
-    ``vobscure.trees.predict_density``'s ``alpha_rho = 3 sigma / (2 pi R^2)``, which equates
-    Eq. 6 at the centre of the sphere (f = 1, V_cap = 2 pi R^3 / 3) with the transmittance
-    exp(-sigma R) of a radius.
+    **porous**:
+
+    .. math::
+
+        V = 1 - \int_{\Omega} w(\omega) \left(1 - e^{-\sigma L(\omega)}\right) d\omega
+
+    over the hemisphere, :math:`L` the chord of the ray in the sphere (from the point to the
+    exit when the point is inside), evaluated by
+    :func:`vobscure.trees.poisson.sphere_transmittance`. The integral is over the cap of
+    directions that meet the sphere, in the angle :math:`\psi` from the direction to the
+    centre (the chord depends on :math:`\psi` only) and the azimuth about it, whose integral
+    over the arc above the horizon is done in closed form; the remaining integral in
+    :math:`\psi` is split at the two angles where the arc meets the horizon and each piece is
+    integrated by ``quadrature``-point Gauss-Legendre after the substitution
+    :math:`\psi = a + (b - a)(1 - \cos t)/2`, which removes the square-root behaviour of the
+    chord at the cap's edge and of the arc at the splits (a third split at
+    :math:`\psi = \pi/2` for a point inside the sphere). Its error with the default 16 nodes
+    is below ``POROUS_QUADRATURE_ERROR`` = 1e-6 (measured; 4e-8 outside the sphere).
+    :math:`\sigma = 0` gives 1, :math:`\sigma = \infty` the "exact" model. The density of
+    Eq. 6, :math:`\alpha\rho`, converts as :math:`\sigma = 2\pi R^2 \alpha\rho / 3`: the
+    inverse of ``vobscure.trees.predict_density``'s :math:`\alpha\rho = 3\sigma / (2\pi R^2)`,
+    which equates Eq. 6 at the centre of the sphere (:math:`f = 1`,
+    :math:`V_{cap} = 2\pi R^3 / 3`) with the transmittance :math:`e^{-\sigma R}` of a radius.
 
     References
     ----------
@@ -389,14 +405,15 @@ def grass_visibility(height, blade_height, cos_theta) -> np.ndarray:
 
     Notes
     -----
-    The paper says only "P_z the height of the hit point on the grass blade and h the total
-    height" (Fig. 6 is a sketch). theta is read here as the angle of the normal from the
-    vertical because that is what makes the two factors meaningful: P_z / h darkens
-    linearly with depth in the field (0 at the ground, where the blades hide the sky, 1 at
-    the tips), and (1 + cos theta) / 2 is the sky view factor of a plane tilted by theta in
-    an open field (1 facing up, 1/2 for a vertical surface, 0 facing down). So the tip of a
-    blade whose normal faces up is fully visible, V = 1; a point on the ground V = 0; a
-    horizontal normal halves the value.
+    The paper says only ":math:`P_z` the height of the hit point on the grass blade and
+    :math:`h` the total height" (Fig. 6 is a sketch). :math:`\theta` is read here as the
+    angle of the normal from the vertical because that is what makes the two factors
+    meaningful: :math:`P_z / h` darkens linearly with depth in the field (0 at the ground,
+    where the blades hide the sky, 1 at the tips), and :math:`(1 + \cos\theta) / 2` is the
+    sky view factor of a plane tilted by :math:`\theta` in an open field (1 facing up, 1/2
+    for a vertical surface, 0 facing down). So the tip of a blade whose normal faces up is
+    fully visible, :math:`V = 1`; a point on the ground :math:`V = 0`; a horizontal normal
+    halves the value.
 
     References
     ----------
