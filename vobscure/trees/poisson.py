@@ -1,24 +1,29 @@
-"""The visibility a Poisson leaf cloud has in expectation: the canopy model exact in expectation.
+r"""The visibility a Poisson leaf cloud has in expectation: the canopy model exact in expectation.
 
 Hegeman et al. (2006, Sec. 3) argue from a Poisson process of leaves and then replace its
-expected visibility by ``exp(-alpha rho f V_cap)`` (Eq. 6). The expectation itself is simple.
-Leaves scattered uniformly in a shell with ``n`` leaves per unit volume, each flat, of
-one-sided area ``A`` and of random orientation, block a segment of length ``L`` a Poisson
-number of times with mean ``sigma L``, where the extinction ``sigma = n A / 2`` (the mean
-projected area of a randomly oriented flat leaf is half its area; ``docs/trees.md`` derives
-it). The probability that a ray from x in direction w escapes is ``exp(-sigma L(x, w))``, L
-the chord of the ray inside the shell, and the expected visibility is its hemisphere average:
+expected visibility by :math:`e^{-\alpha \rho f V_{cap}}` (Eq. 6). The expectation itself is
+simple. Leaves scattered uniformly in a shell with :math:`n` leaves per unit volume, each flat,
+of one-sided area :math:`A` and of random orientation, block a segment of length :math:`L` a
+Poisson number of times with mean :math:`\sigma L`, where the extinction
+:math:`\sigma = n A / 2` (the mean projected area of a randomly oriented flat leaf is half its
+area; ``docs/trees.md`` derives it). The probability that a ray from :math:`x` in direction
+:math:`w` escapes is :math:`e^{-\sigma L(x, w)}`, :math:`L` the chord of the ray inside the
+shell, and the expected visibility is its hemisphere average:
 
-    V(x, n) = (1 / 2 pi) int_{n.w > 0} exp(-sigma L(x, w)) dw          (uniform)
-    V(x, n) = (1 / pi)   int_{n.w > 0} exp(-sigma L(x, w)) (n.w) dw    (cosine)
+.. math::
 
-For a sphere of radius R the chord depends only on the angle psi between w and the direction
-from x to the centre, so the integral is one-dimensional once the azimuth about that
+    V(x, n) = \frac{1}{2\pi} \int_{n \cdot w > 0} e^{-\sigma L(x, w)} \, dw \quad
+    \text{(uniform)}, \qquad
+    V(x, n) = \frac{1}{\pi} \int_{n \cdot w > 0} e^{-\sigma L(x, w)} \, (n \cdot w) \, dw \quad
+    \text{(cosine)}
+
+For a sphere of radius :math:`R` the chord depends only on the angle :math:`\psi` between
+:math:`w` and the direction from :math:`x` to the centre, so the integral is one-dimensional once the azimuth about that
 direction is integrated in closed form (:func:`sphere_transmittance`, the one implementation
 of this integral: the ``"porous"`` ground model of :func:`vobscure.trees.occluder_visibility`
-calls it too). V then depends only on ``|x - c| / R``, the angle between n and ``x - c``, and
-``sigma R``: :func:`poisson_visibility` interpolates a table precomputed once
-(:data:`TABLE_RADIAL`, :data:`TABLE_ANGULAR`), exact in ``sigma R``, within
+calls it too). :math:`V` then depends only on :math:`\lVert x - c \rVert / R`, the angle
+between :math:`n` and :math:`x - c`, and :math:`\sigma R`: :func:`poisson_visibility` interpolates a table precomputed once
+(:data:`TABLE_RADIAL`, :data:`TABLE_ANGULAR`), exact in :math:`\sigma R`, within
 :data:`TABLE_ERROR` of the direct quadrature. Ellipsoids use Hegeman's affine map (an
 approximation, measured against :func:`poisson_quadrature` in the true ellipsoid), sets of
 shells Hegeman's Sec. 5 rule (each point belongs to the shell with the closest centre).
@@ -178,7 +183,7 @@ def _absorbed(s: float, L: np.ndarray) -> np.ndarray:
 
 def sphere_transmittance(points, normals, sphere, *, extinction: float, weighting: str = "cosine",
                          quadrature: int = DEFAULT_QUADRATURE) -> np.ndarray:
-    """Expected visibility past a sphere of absorbing medium, by direct quadrature.
+    r"""Expected visibility past a sphere of absorbing medium, by direct quadrature.
 
     Parameters
     ----------
@@ -202,9 +207,13 @@ def sphere_transmittance(points, normals, sphere, *, extinction: float, weightin
 
     Notes
     -----
-    ``V = 1 - int w(omega) (1 - exp(-sigma L(omega))) d omega`` over the hemisphere, L the
-    chord of the ray in the sphere (from the point to the exit when the point is inside): the
-    integral over psi (angle from the direction to the centre) of the closed-form azimuthal
+    .. math::
+
+        V = 1 - \int_{\Omega} w(\omega) \left(1 - e^{-\sigma L(\omega)}\right) d\omega
+
+    over the hemisphere, :math:`L` the chord of the ray in the sphere (from the point to the
+    exit when the point is inside): the integral over :math:`\psi` (angle from the direction
+    to the centre) of the closed-form azimuthal
     weight of the arc above the horizon, split at its kinks (module docstring and
     ``docs/trees.md``). With the default 16 nodes per piece the error is below 1e-6 (measured
     against 512 nodes; ``tests/test_occluders.py``). This is the one implementation of the
@@ -405,7 +414,7 @@ def _as_extinctions(value, shell) -> np.ndarray:
 
 
 def extinction(n_leaves: float, leaf_area: float, shell) -> float:
-    """sigma = n A / 2: leaves crossed per unit length in a uniform cloud of random leaves.
+    r"""sigma = n A / 2: leaves crossed per unit length in a uniform cloud of random leaves.
 
     Parameters
     ----------
@@ -420,20 +429,20 @@ def extinction(n_leaves: float, leaf_area: float, shell) -> float:
     Returns
     -------
     float
-        ``sigma = (n_leaves / volume) A / 2``, per unit length.
+        :math:`\sigma = (n_{leaves} / \text{volume}) \, A / 2`, per unit length.
 
     Notes
     -----
-    A flat leaf of area A, oriented uniformly at random, casts along a fixed direction a
-    shadow of mean area A / 2 (the mean of |cos| over the sphere is 1/2; ``docs/trees.md``).
-    A segment of length L is then met by a Poisson number of leaves with mean
-    ``n (A / 2) L``: the leaves whose centres lie in the swept volume.
+    A flat leaf of area :math:`A`, oriented uniformly at random, casts along a fixed direction
+    a shadow of mean area :math:`A / 2` (the mean of :math:`|\cos|` over the sphere is 1/2;
+    ``docs/trees.md``). A segment of length :math:`L` is then met by a Poisson number of
+    leaves with mean :math:`n (A / 2) L`: the leaves whose centres lie in the swept volume.
 
     References
     ----------
     Hegeman et al. 2006, Sec. 3 (the Poisson argument of Eq. 6). Ross 1981, "The radiation
-    regime and architecture of plant stands" (the G-function, G = 1/2 for a spherical leaf
-    angle distribution).
+    regime and architecture of plant stands" (the G-function, :math:`G = 1/2` for a spherical
+    leaf angle distribution).
 
     Examples
     --------
@@ -481,7 +490,7 @@ def _unit_frame(shell, P: np.ndarray, N: np.ndarray):
 
 def poisson_visibility(points, normals, shell, *, extinction: float, weighting: str = "cosine",
                        chunk: int = DEFAULT_CHUNK) -> np.ndarray:
-    """Expected sky visibility in and around a Poisson leaf cloud filling a shell.
+    r"""Expected sky visibility in and around a Poisson leaf cloud filling a shell.
 
     Parameters
     ----------
@@ -517,22 +526,24 @@ def poisson_visibility(points, normals, shell, *, extinction: float, weighting: 
 
     Notes
     -----
-    In the shell's unit frame (``x' = (x - c) / R`` for a sphere) V depends on three numbers
-    only: ``rho = |x'|``, ``u = n.x' / |x'|`` (the cosine of the angle between the normal and
-    the direction away from the centre) and ``s = sigma R``. The table holds, at
-    (2 :data:`TABLE_RADIAL` + 1) x (:data:`TABLE_ANGULAR` + 1) nodes in (rho, u), the chords
+    In the shell's unit frame (:math:`x' = (x - c) / R` for a sphere) :math:`V` depends on
+    three numbers only: :math:`\rho = \lVert x' \rVert`, :math:`u = n \cdot x' / \lVert x'
+    \rVert` (the cosine of the angle between the normal and the direction away from the
+    centre) and :math:`s = \sigma R`. The table holds, at (2 :data:`TABLE_RADIAL` + 1) x
+    (:data:`TABLE_ANGULAR` + 1) nodes in :math:`(\rho, u)`, the chords
     and weights of the direct quadrature of :func:`sphere_transmittance`
     (:data:`TABLE_QUADRATURE` nodes per piece), computed once per process and weighting
-    (0.15-0.25 s measured); each call sums them for its own s, so the table is exact in s, and
-    interpolates bilinearly in (rho, u). Its error against the direct quadrature is below
-    :data:`TABLE_ERROR` for s up to :data:`TABLE_SIGMA_R_MAX` and for s = inf (measured, in
-    ``docs/trees.md``). At the centre, V = exp(-sigma R) for both weightings to rounding.
+    (0.15-0.25 s measured); each call sums them for its own :math:`s`, so the table is exact
+    in :math:`s`, and interpolates bilinearly in :math:`(\rho, u)`. Its error against the
+    direct quadrature is below :data:`TABLE_ERROR` for :math:`s` up to
+    :data:`TABLE_SIGMA_R_MAX` and for :math:`s = \infty` (measured, in ``docs/trees.md``). At
+    the centre, :math:`V = e^{-\sigma R}` for both weightings to rounding.
 
     **Ellipsoids** are mapped to the unit sphere by Hegeman's affine map (points directly,
     normals by the inverse transpose, Sec. 3) and use the sphere's table with
-    ``s = sigma R_eq``, ``R_eq = (a b c)^(1/3)`` the volume-equivalent radius: exact for a
-    sphere, an approximation otherwise (a chord's world length is not its unit-frame length
-    times R_eq). ``docs/trees.md`` measures it against :func:`poisson_quadrature` in the
+    :math:`s = \sigma R_{eq}`, :math:`R_{eq} = (a b c)^{1/3}` the volume-equivalent radius:
+    exact for a sphere, an approximation otherwise (a chord's world length is not its
+    unit-frame length times :math:`R_{eq}`). ``docs/trees.md`` measures it against :func:`poisson_quadrature` in the
     true ellipsoid.
 
     References
@@ -585,7 +596,7 @@ def poisson_visibility(points, normals, shell, *, extinction: float, weighting: 
 
 def poisson_quadrature(points, normals, shell, *, extinction: float, weighting: str = "cosine",
                        nodes: int = 96) -> np.ndarray:
-    """The expected visibility by brute-force quadrature over the hemisphere, for any shell.
+    r"""The expected visibility by brute-force quadrature over the hemisphere, for any shell.
 
     The reference that :func:`poisson_visibility`'s affine map is measured against in an
     ellipsoid (and an independent check of the sphere's one-dimensional quadrature): slow,
@@ -611,10 +622,11 @@ def poisson_quadrature(points, normals, shell, *, extinction: float, weighting: 
 
     Notes
     -----
-    ``V = sum_ij w_ij exp(-sigma L(x, w_ij))`` over a product rule in (mu, phi) about the
-    normal: ``mu = cos`` of the polar angle by Gauss-Legendre on [0, 1] (weight ``mu / pi``
-    per unit mu and phi for the cosine weighting, ``1 / 2 pi`` for the uniform one), phi by
-    the midpoint rule (exact for the trigonometric polynomials of the azimuth up to degree
+    :math:`V = \sum_{ij} w_{ij} \, e^{-\sigma L(x, \omega_{ij})}` over a product rule in
+    :math:`(\mu, \phi)` about the normal: :math:`\mu` the cosine of the polar angle by
+    Gauss-Legendre on :math:`[0, 1]` (weight :math:`\mu / \pi` per unit :math:`\mu` and
+    :math:`\phi` for the cosine weighting, :math:`1 / (2\pi)` for the uniform one),
+    :math:`\phi` by the midpoint rule (exact for the trigonometric polynomials of the azimuth up to degree
     ``2 nodes - 1``). The chord has kinks where the rays graze the shell, so the error falls
     only as a power of ``nodes``: with 96 nodes it is below 1e-4 against the sphere's
     one-dimensional quadrature on the test points (``tests/test_poisson.py``).
