@@ -1,10 +1,10 @@
-"""Shells that enclose a tree's canopy: spheres, ellipsoids and sets of them.
+r"""Shells that enclose a tree's canopy: spheres, ellipsoids and sets of them.
 
 Hegeman et al. 2006 enclose a tree in "a spherical shell" (Sec. 3), in an ellipsoid when the
 crown is elongated (Sec. 3, Fig. 3 right), and suggest several shells with each point
 belonging to the one with the closest centre (Sec. 5, Fig. 3 left). Every shell here is the
-image of the unit sphere under an affine map ``x = c + Q diag(radii) x'``; ``to_unit`` is its
-inverse, and every model (canopy visibility, chord lengths) is computed in that unit frame.
+image of the unit sphere under an affine map :math:`x = c + Q \operatorname{diag}(r) \, x'`
+(:math:`r` the ``radii``); ``to_unit`` is its inverse, and every model (canopy visibility, chord lengths) is computed in that unit frame.
 """
 
 from __future__ import annotations
@@ -90,12 +90,12 @@ class Sphere:
 
     @property
     def volume(self) -> float:
-        """4/3 pi R^3."""
+        r""":math:`\frac{4}{3} \pi R^3`."""
         return 4.0 / 3.0 * math.pi * self.radius ** 3
 
     @property
     def volume_scale(self) -> float:
-        """R^3: the factor from volumes in the unit frame to world volumes."""
+        """:math:`R^3`: the factor from volumes in the unit frame to world volumes."""
         return self.radius ** 3
 
     @property
@@ -104,7 +104,7 @@ class Sphere:
         return self.radius
 
     def to_unit(self, points) -> np.ndarray:
-        """(n, 3) coordinates ``(x - c) / R`` of ``points`` (n, 3) in the unit-sphere frame."""
+        """(n, 3) coordinates :math:`(x - c) / R` of ``points`` (n, 3) in the unit-sphere frame."""
         return (as_points(points, "points") - self.center) / self.radius
 
     def vectors_to_unit(self, vectors) -> np.ndarray:
@@ -120,7 +120,7 @@ class Sphere:
         return _contains(self, points)
 
     def chord_length(self, origins, directions) -> np.ndarray:
-        """(n,) length of the part of the ray {o + t d, t >= 0} inside the ball.
+        r"""(n,) length of the part of the ray :math:`\{o + t d, t \ge 0\}` inside the ball.
 
         0 for a miss (and for a tangent ray); from the origin to the exit when the origin is
         inside. ``directions`` need not be unit vectors (they are normalized).
@@ -130,7 +130,7 @@ class Sphere:
 
 @dataclass(frozen=True, eq=False)
 class Ellipsoid:
-    """An ellipsoid ``{c + Q diag(radii) x' : |x'| <= 1}``.
+    r"""An ellipsoid :math:`\{c + Q \operatorname{diag}(r) \, x' : \lVert x' \rVert \le 1\}`.
 
     Parameters
     ----------
@@ -193,21 +193,21 @@ class Ellipsoid:
 
     @property
     def volume(self) -> float:
-        """4/3 pi a b c."""
+        r""":math:`\frac{4}{3} \pi a b c`."""
         return 4.0 / 3.0 * math.pi * self.volume_scale
 
     @property
     def volume_scale(self) -> float:
-        """a b c: the factor from volumes in the unit frame to world volumes."""
+        """:math:`a b c`: the factor from volumes in the unit frame to world volumes."""
         return float(np.prod(self.radii))
 
     @property
     def equivalent_radius(self) -> float:
-        """(a b c)^(1/3): the radius of the sphere of the same volume."""
+        """:math:`(a b c)^{1/3}`: the radius of the sphere of the same volume."""
         return float(np.cbrt(np.prod(self.radii)))
 
     def to_unit(self, points) -> np.ndarray:
-        """(n, 3) coordinates ``diag(radii)^-1 Q^T (x - c)`` of ``points`` (n, 3)."""
+        r"""(n, 3) coordinates :math:`\operatorname{diag}(r)^{-1} Q^T (x - c)` of ``points`` (n, 3)."""
         return ((as_points(points, "points") - self.center) @ self.rotation) / self.radii
 
     def vectors_to_unit(self, vectors) -> np.ndarray:
@@ -228,7 +228,7 @@ class Ellipsoid:
         return _contains(self, points)
 
     def chord_length(self, origins, directions) -> np.ndarray:
-        """(n,) length of the part of the ray {o + t d, t >= 0} inside the ellipsoid.
+        r"""(n,) length of the part of the ray :math:`\{o + t d, t \ge 0\}` inside the ellipsoid.
 
         0 for a miss (and for a tangent ray); from the origin to the exit when the origin is
         inside. ``directions`` need not be unit vectors (they are normalized).
@@ -242,7 +242,7 @@ def _contains(shell, points) -> np.ndarray:
 
 
 def chord_length(shell, origins, directions) -> np.ndarray:
-    """(n,) length of the part of each ray {o + t d, t >= 0} inside ``shell``.
+    r"""(n,) length of the part of each ray :math:`\{o + t d, t \ge 0\}` inside ``shell``.
 
     Parameters
     ----------
@@ -260,10 +260,11 @@ def chord_length(shell, origins, directions) -> np.ndarray:
 
     Notes
     -----
-    Solved in the shell's unit frame, where the shell is the unit sphere: with
-    ``e`` the unit direction there, ``b = o.e`` and ``disc = 1 - |o - b e|^2`` (the
-    cancellation-free form of the discriminant); the exit from inside is ``-b + sqrt(disc)``,
-    written ``-(|o|^2 - 1) / (sqrt(disc) + b)`` when ``b > 0``. Lengths in the unit frame are
+    Solved in the shell's unit frame, where the shell is the unit sphere: with :math:`e` the
+    unit direction there, :math:`b = o \cdot e` and :math:`D = 1 - \lVert o - b e \rVert^2`
+    (the cancellation-free form of the discriminant); the exit from inside is
+    :math:`-b + \sqrt{D}`, written :math:`-(\lVert o \rVert^2 - 1) / (\sqrt{D} + b)` when
+    :math:`b > 0`. Lengths in the unit frame are
     divided by the length of the mapped world unit step.
 
     Examples
@@ -463,7 +464,7 @@ def _flatness(P: np.ndarray) -> float:
 
 
 def bounding_ellipsoid(points, *, tol: float = 1e-4) -> Ellipsoid:
-    """The minimum-volume ellipsoid enclosing ``points`` (Khachiyan's algorithm).
+    r"""The minimum-volume ellipsoid enclosing ``points`` (Khachiyan's algorithm).
 
     Parameters
     ----------
@@ -490,12 +491,16 @@ def bounding_ellipsoid(points, *, tol: float = 1e-4) -> Ellipsoid:
 
     Notes
     -----
-    Khachiyan's barycentric coordinate ascent on the dual weights ``u`` (lifted points
-    ``q_j = (p_j, 1)``, ``X(u) = sum u_j q_j q_j^T``, ``M_j = q_j^T X^-1 q_j``), with Todd &
-    Yildirim's away steps (weight moved off the point of smallest ``M_j``), which make the
-    convergence linear. It runs on the convex hull's vertices. The ellipsoid is
-    ``{x : (x - c)^T Sigma^-1 (x - c) <= max_j (M_j - 1)}``, ``c = sum u_j p_j``,
-    ``Sigma = sum u_j (p_j - c)(p_j - c)^T``.
+    Khachiyan's barycentric coordinate ascent on the dual weights :math:`u` (lifted points
+    :math:`q_j = (p_j, 1)`, :math:`X(u) = \sum_j u_j q_j q_j^T`,
+    :math:`M_j = q_j^T X^{-1} q_j`), with Todd & Yildirim's away steps (weight moved off the
+    point of smallest :math:`M_j`), which make the convergence linear. It runs on the convex
+    hull's vertices. The ellipsoid is
+
+    .. math::
+
+        \{x : (x - c)^T \Sigma^{-1} (x - c) \le \max_j (M_j - 1)\}, \quad
+        c = \sum_j u_j p_j, \quad \Sigma = \sum_j u_j (p_j - c)(p_j - c)^T.
 
     References
     ----------
