@@ -4,7 +4,8 @@ Hegeman et al. 2006 enclose a tree in "a spherical shell" (Sec. 3), in an ellips
 crown is elongated (Sec. 3, Fig. 3 right), and suggest several shells with each point
 belonging to the one with the closest centre (Sec. 5, Fig. 3 left). Every shell here is the
 image of the unit sphere under an affine map :math:`x = c + Q \operatorname{diag}(r) \, x'`
-(:math:`r` the ``radii``); ``to_unit`` is its inverse, and every model (canopy visibility, chord lengths) is computed in that unit frame.
+(:math:`r` the ``radii``); ``to_unit`` is its inverse, and every model (canopy visibility,
+chord lengths) is computed in that unit frame.
 """
 
 from __future__ import annotations
