@@ -18,12 +18,13 @@ shell, and the expected visibility is its hemisphere average:
     \text{(cosine)}
 
 For a sphere of radius :math:`R` the chord depends only on the angle :math:`\psi` between
-:math:`w` and the direction from :math:`x` to the centre, so the integral is one-dimensional once the azimuth about that
-direction is integrated in closed form (:func:`sphere_transmittance`, the one implementation
+:math:`w` and the direction from :math:`x` to the centre, so the integral is one-dimensional
+once the azimuth about that direction is integrated in closed form (:func:`sphere_transmittance`, the one implementation
 of this integral: the ``"porous"`` ground model of :func:`vobscure.trees.occluder_visibility`
 calls it too). :math:`V` then depends only on :math:`\lVert x - c \rVert / R`, the angle
-between :math:`n` and :math:`x - c`, and :math:`\sigma R`: :func:`poisson_visibility` interpolates a table precomputed once
-(:data:`TABLE_RADIAL`, :data:`TABLE_ANGULAR`), exact in :math:`\sigma R`, within
+between :math:`n` and :math:`x - c`, and :math:`\sigma R`: :func:`poisson_visibility`
+interpolates a table precomputed once (:data:`TABLE_RADIAL`, :data:`TABLE_ANGULAR`), exact
+in :math:`\sigma R`, within
 :data:`TABLE_ERROR` of the direct quadrature. Ellipsoids use Hegeman's affine map (an
 approximation, measured against :func:`poisson_quadrature` in the true ellipsoid), sets of
 shells Hegeman's Sec. 5 rule (each point belongs to the shell with the closest centre).
