@@ -13,9 +13,9 @@ count is the cap's volume times the density, reduced by the off-centre factor :m
 
 Ellipsoids are mapped to the unit sphere first (points directly, normals by the inverse
 transpose). Also here: the Reeves & Blau 1985 baseline the paper compares with, the density
-:math:`\alpha\rho` fitted to a reference visibility (the "one-time preprocessing step" of Sec. 4), and
-the density predicted from leaf statistics by the Poisson argument of Sec. 3 (derived in
-``docs/trees.md``).
+:math:`\alpha\rho` fitted to a reference visibility (the "one-time preprocessing step" of
+Sec. 4), and the density predicted from leaf statistics by the Poisson argument of Sec. 3
+(derived in ``docs/trees.md``).
 """
 
 from __future__ import annotations
