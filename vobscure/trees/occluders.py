@@ -276,8 +276,8 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
     **Several spheres** combine as the product of the per-sphere visibilities, which assumes
     independent occluders: exact for the porous transmittance along one direction, not
     after the angular integration, and for opaque spheres the product counts the overlap of
-    two caps as :math:`F_1 F_2` instead of its true weight. ``docs/trees.md`` ("Occluders and grass")
-    measures what this costs against ray casting of the union.
+    two caps as :math:`F_1 F_2` instead of its true weight. ``docs/trees.md`` ("Occluders and
+    grass") measures what this costs against ray casting of the union.
 
     **hegeman** (Eqs. 7-8): :math:`A_{SA} = \pi (r/d)^2`, :math:`V = 1 - A_{SA} / (2\pi)`.
     :math:`r/d` is clamped to 1 on and inside the sphere (:math:`d \le r`), so
