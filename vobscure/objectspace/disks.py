@@ -77,8 +77,8 @@ def disk_shadow(receivers, receiver_normals, emitters, emitter_normals, emitter_
                 term: str = DEFAULT_TERM):
     r"""The shadow of every emitter disk on every receiver point.
 
-    With :math:`\mathbf{e}` the unit vector from the receiver to the emitter, r their
-    distance, A the emitter's area, :math:`\cos\theta_E = -\mathbf{e}\cdot\mathbf{n}_E`
+    With :math:`\mathbf{e}` the unit vector from the receiver to the emitter, :math:`r` their
+    distance, :math:`A` the emitter's area, :math:`\cos\theta_E = -\mathbf{e}\cdot\mathbf{n}_E`
     (positive when the emitter's front faces the receiver) and
     :math:`\cos\theta_R = \mathbf{e}\cdot\mathbf{n}_R`:
 
@@ -213,10 +213,10 @@ def bunnell(scene, points=None, normals=None, *, passes: int = 2, term: str = DE
     r"""Ambient visibility from Bunnell's disks (1 = open).
 
     Pass 1 sums the shadows of all disks, double shadowing included:
-    :math:`V_1(i) = 1 - \sum_j S_{ij}`. Pass p > 1 weights each emitter by its accessibility
+    :math:`V_1(i) = 1 - \sum_j S_{ij}`. Pass :math:`p > 1` weights each emitter by its accessibility
     from the previous pass, :math:`V_p(i) = 1 - \sum_j S_{ij} V_{p-1}(j)` (Bunnell 2005,
     Sec. 14.2): a disk that is itself in shadow is mostly hidden behind the disk that
-    shadows it. Each pass is clamped to [0, 1]. With ``average``, the result is the mean of
+    shadows it. Each pass is clamped to :math:`[0, 1]`. With ``average``, the result is the mean of
     the last two passes, :math:`(V_{p-1} + V_p)/2`.
 
     Parameters
