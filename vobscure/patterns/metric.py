@@ -46,7 +46,7 @@ FAMILIES = ("mixed", "cap", "crease")
 
 
 def cap_volume(h):
-    """Volume of a cap of height ``h`` cut from the unit ball.
+    r"""Volume of a cap of height ``h`` cut from the unit ball.
 
     Parameters
     ----------
@@ -56,7 +56,7 @@ def cap_volume(h):
     Returns
     -------
     float64 array
-        ``pi h^2 (3 - h) / 3`` (Hegeman et al. 2006, Eq. 4, with R = 1).
+        :math:`\pi h^2 (3 - h) / 3` (Hegeman et al. 2006, Eq. 4, with :math:`R = 1`).
 
     Examples
     --------
@@ -83,7 +83,8 @@ def _line_piece(t, d, k):
 
 
 def crease_volume(n1, t1, n2, t2):
-    """Volume of the unit ball on the open side of two planes, {n1 . x <= t1} and {n2 . x <= t2}.
+    r"""Volume of the unit ball on the open side of two planes, :math:`\{n_1 \cdot x \le t_1\}` and
+    :math:`\{n_2 \cdot x \le t_2\}`.
 
     Exact (closed form), vectorized over leading dimensions.
 
@@ -100,18 +101,31 @@ def crease_volume(n1, t1, n2, t2):
 
     Notes
     -----
-    Let e be the direction of the planes' common line. Along e the region is a prism over a
-    2-D wedge W = {u1 . x <= a1} and {u2 . x <= a2} (u_i: the normals in the plane normal to e,
-    a_i = t_i), so its volume is the integral over W within the unit disk of the chord length
-    2 sqrt(1 - |x|^2). With F(rho) = int_0^rho 2 sqrt(1 - r^2) r dr = (2/3)(1 - (1 - rho^2)^(3/2)),
-    Green's theorem turns that area integral into the boundary integral of F(rho) dtheta:
-    arcs of the unit circle give (2/3) dtheta; the piece of line i at distance d = |a_i| gives
-    (2/3) sign(a_i) [psi - I], psi = atan(t / d), with t the coordinate along the line,
-    k^2 = 1 - d^2 and I = atan(t / (d sqrt(k^2 - t^2))) - d asin(t / k)
-    - (d / 2)(t sqrt(k^2 - t^2) + k^2 asin(t / k)), the antiderivative of
-    d (k^2 - t^2)^(3/2) / (d^2 + t^2). Parallel planes reduce to caps and slabs.
-    The tests check it against Monte Carlo and the split identity
-    V(n1, t1, n2, t2) + V(n1, t1, -n2, -t2) = V_ball - V_cap(1 - t1).
+    Let :math:`e` be the direction of the planes' common line. Along :math:`e` the region is a
+    prism over a 2-D wedge :math:`W = \{u_1 \cdot x \le a_1\} \cap \{u_2 \cdot x \le a_2\}`
+    (:math:`u_i`: the normals in the plane normal to :math:`e`, :math:`a_i = t_i`), so its
+    volume is the integral over :math:`W` within the unit disk of the chord length
+    :math:`2\sqrt{1 - \lVert x \rVert^2}`. With
+
+    .. math::
+
+        F(\rho) = \int_0^\rho 2 \sqrt{1 - r^2} \, r \, dr
+                = \tfrac{2}{3} \left(1 - (1 - \rho^2)^{3/2}\right),
+
+    Green's theorem turns that area integral into the boundary integral of
+    :math:`F(\rho) \, d\theta`: arcs of the unit circle give :math:`\frac{2}{3} d\theta`; the
+    piece of line :math:`i` at distance :math:`d = |a_i|` gives
+    :math:`\frac{2}{3} \operatorname{sign}(a_i) [\psi - I]`, :math:`\psi = \arctan(t / d)`,
+    with :math:`t` the coordinate along the line, :math:`k^2 = 1 - d^2` and
+
+    .. math::
+
+        I = \arctan\frac{t}{d \sqrt{k^2 - t^2}} - d \arcsin\frac{t}{k}
+            - \frac{d}{2} \left(t \sqrt{k^2 - t^2} + k^2 \arcsin\frac{t}{k}\right),
+
+    the antiderivative of :math:`d (k^2 - t^2)^{3/2} / (d^2 + t^2)`. Parallel planes reduce
+    to caps and slabs. The tests check it against Monte Carlo and the split identity
+    :math:`V(n_1, t_1, n_2, t_2) + V(n_1, t_1, -n_2, -t_2) = V_{ball} - V_{cap}(1 - t_1)`.
 
     Examples
     --------
@@ -280,7 +294,7 @@ def _estimates(pattern: SamplePattern, cfg: _Configurations) -> np.ndarray:
 
 def squared_errors(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed=QUALITY_SEED,
                    family: str = "mixed") -> np.ndarray:
-    """Squared errors of a pattern's VO estimate, configuration by configuration.
+    r"""Squared errors of a pattern's VO estimate, configuration by configuration.
 
     Parameters
     ----------
@@ -290,7 +304,8 @@ def squared_errors(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed
     Returns
     -------
     (trials,) float64
-        (estimate - exact)^2 per configuration; :func:`quality` is the root of their mean.
+        :math:`(\text{estimate} - \text{exact})^2` per configuration; :func:`quality` is the
+        root of their mean.
 
     Examples
     --------
@@ -313,13 +328,14 @@ def squared_errors(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed
 
 def quality(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed=QUALITY_SEED,
             family: str = "mixed") -> Estimate:
-    """RMS error of a pattern's VO estimate over random configurations with exact VO.
+    r"""RMS error of a pattern's VO estimate over random configurations with exact VO.
 
     Parameters
     ----------
     pattern : SamplePattern
-        A disk pattern is measured with line sampling (each sample (x, y) integrates the chord
-        [-z_s, z_s], z_s = sqrt(1 - x^2 - y^2), against a height field), a ball pattern with
+        A disk pattern is measured with line sampling (each sample :math:`(x, y)` integrates
+        the chord :math:`[-z_s, z_s]`, :math:`z_s = \sqrt{1 - x^2 - y^2}`, against a height
+        field), a ball pattern with
         point sampling as ``vo_point`` does it, a sample at the centre included (Notes).
     trials : int, optional
         Number of random configurations (default :data:`QUALITY_TRIALS`).
@@ -334,15 +350,17 @@ def quality(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed=QUALIT
     Returns
     -------
     Estimate
-        ``value``: the RMS error sqrt(mean((estimate - exact)^2)); ``stderr``: its standard
-        error by the delta method, sd((estimate - exact)^2) / (2 RMS sqrt(trials));
+        ``value``: the RMS error :math:`\sqrt{\operatorname{mean}((\text{estimate} -
+        \text{exact})^2)}`; ``stderr``: its standard error by the delta method,
+        :math:`\operatorname{sd}((\text{estimate} - \text{exact})^2) / (2 \, \text{RMS}
+        \sqrt{\text{trials}})`;
         ``samples``: trials.
 
     Notes
     -----
-    Every plane has a normal uniform over the hemisphere n_z > 0 and is occupied on its far
-    side n . x > t ("behind the surface" along the view axis z), so that a depth buffer can
-    hold every configuration. A crease's occupied set is the union (concave) or the
+    Every plane has a normal uniform over the hemisphere :math:`n_z > 0` and is occupied on
+    its far side :math:`n \cdot x > t` ("behind the surface" along the view axis :math:`z`),
+    so that a depth buffer can hold every configuration. A crease's occupied set is the union (concave) or the
     intersection (convex) of the two half-spaces. Per trial the pattern is turned by a random
     element of O(2) about the view axis (disk) or of O(3) (ball), as the estimators randomize
     per pixel (Sec. 4.5). A ball sample is open when it is not occupied, except a sample
