@@ -358,16 +358,16 @@ def quality(pattern: SamplePattern, *, trials: int = QUALITY_TRIALS, seed=QUALIT
 
     Notes
     -----
-    Every plane has a normal uniform over the hemisphere :math:`n_z > 0` and is occupied on
-    its far side :math:`n \cdot x > t` ("behind the surface" along the view axis :math:`z`),
-    so that a depth buffer can hold every configuration. A crease's occupied set is the union (concave) or the
-    intersection (convex) of the two half-spaces. Per trial the pattern is turned by a random
-    element of O(2) about the view axis (disk) or of O(3) (ball), as the estimators randomize
-    per pixel (Sec. 4.5). A ball sample is open when it is not occupied, except a sample
-    exactly at the centre when the first plane passes through it (every crease: the centre is
-    the depth buffer's surface point): its test would compare the surface with itself, so it
-    counts half occupied by that plane, as ``vo_point`` counts it (docs/screenspace.md, "The
-    centre sample"), and the second plane decides as for any sample; the centre alone then
+    Every plane has a normal uniform over the hemisphere :math:`n_z > 0` and is occupied on its
+    far side :math:`n \cdot x > t` ("behind the surface" along the view axis :math:`z`), so that
+    a depth buffer can hold every configuration. A crease's occupied set is the union (concave)
+    or the intersection (convex) of the two half-spaces. Per trial the pattern is turned by a
+    random element of O(2) about the view axis (disk) or of O(3) (ball), as the estimators
+    randomize per pixel (Sec. 4.5). A ball sample is open when it is not occupied, except a
+    sample exactly at the centre when the first plane passes through it (every crease: the
+    centre is the depth buffer's surface point): its test would compare the surface with itself,
+    so it counts half occupied by that plane, as ``vo_point`` counts it (docs/screenspace.md,
+    "The centre sample"), and the second plane decides as for any sample; the centre alone then
     reads 1/2 on every crease. The exact VO: the cap volume (Hegeman et al. 2006, Eq. 4) and
     :func:`crease_volume`. The same ``trials`` and int ``seed`` give every pattern the same
     configurations, so differences between patterns are measured with common random numbers.
