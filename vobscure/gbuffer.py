@@ -190,6 +190,31 @@ class GBuffer:
         out[self.hits["index"]] = values
         return _frozen(out.reshape(H, W, 3))
 
+    def per_pixel(self, fn) -> np.ndarray:
+        """An (H, W) float64 image of ``fn(points, normals)`` at the covered pixels, NaN on
+        background.
+
+        ``points`` and ``normals`` are the (k, 3) float64 world-space positions and shading
+        normals of the k covered pixels, row-major (:attr:`hits`); ``fn`` returns k values. It
+        is not called when no pixel is covered, so a model that needs set-up work does it
+        inside ``fn``. The object-space models evaluate themselves per pixel through this
+        (:func:`vobscure.objectspace.bunnell_gbuffer`, :mod:`vobscure.trees.pixels`).
+
+        Examples
+        --------
+        >>> import vobscure as vo
+        >>> gb = vo.render_gbuffer(vo.scenes.slab(), vo.Camera.look_at((0, 2, 1), (0, 0, 0), size=(4, 3)))
+        >>> img = gb.per_pixel(lambda p, n: n[:, 1])       # the world normal's y: 1 on the top face
+        >>> img.shape, float(img[1, 1])
+        ((3, 4), 1.0)
+        """
+        out = np.full(self.shape, np.nan)
+        if self.valid.any():
+            hits = self.hits
+            out[self.valid] = fn(np.asarray(hits["world_position"], dtype=np.float64),
+                                 np.asarray(hits["world_normal"], dtype=np.float64))
+        return out
+
     @cached_property
     def world_position(self) -> np.ndarray:
         return self._image(self.hits["world_position"], np.nan)

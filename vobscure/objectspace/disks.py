@@ -340,15 +340,13 @@ def bunnell_gbuffer(gbuffer, *, scene, passes: int = 2, term: str = DEFAULT_TERM
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a vobscure Scene (the one the G-buffer shows), got "
                          f"{type(scene).__name__}")
-    valid = np.asarray(gbuffer.valid)
-    out = np.full(valid.shape, np.nan)
-    if not valid.any():
-        return out
-    x = as_points(np.asarray(gbuffer.world_position, dtype=np.float64)[valid], "gbuffer.world_position")
-    n = as_unit_vectors(np.asarray(gbuffer.world_normal, dtype=np.float64)[valid], "gbuffer.world_normal",
-                        count=len(x))
-    out[valid] = _state(scene, max_edge, opts, True).evaluate(x, n, passes=opts[0])
-    return out
+
+    def disks(x, n):
+        x = as_points(x, "gbuffer.world_position")
+        n = as_unit_vectors(n, "gbuffer.world_normal", count=len(x))
+        return _state(scene, max_edge, opts, True).evaluate(x, n, passes=opts[0])
+
+    return gbuffer.per_pixel(disks)
 
 
 def shadow_evaluations(scene, points=None, normals=None, *, hierarchy: bool = True, max_edge=None,

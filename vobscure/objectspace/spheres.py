@@ -532,15 +532,11 @@ def sphere_set_gbuffer(gbuffer, *, scene, k: int = 32, order: int = 4, method: s
     (H, W) float64
         Visibility, NaN on background.
     """
-    H, W = gbuffer.valid.shape
-    out = np.full((H, W), np.nan)
-    valid = gbuffer.valid
-    if not valid.any():
-        return out
-    scene = as_scene(scene)
-    spheres = _cached_sphere_set(scene, check_int(k, "k"), seed)
-    x = np.asarray(gbuffer.world_position, dtype=np.float64)[valid]
-    n = np.asarray(gbuffer.world_normal, dtype=np.float64)[valid]
-    out[valid] = sphere_set_ao(x, n, spheres.centers, spheres.radii, order=order, method=method, exp=exp,
-                               weighting=weighting)
-    return out
+    k = check_int(k, "k")
+
+    def spheres_ao(x, n):
+        spheres = _cached_sphere_set(as_scene(scene), k, seed)
+        return sphere_set_ao(x, n, spheres.centers, spheres.radii, order=order, method=method, exp=exp,
+                             weighting=weighting)
+
+    return gbuffer.per_pixel(spheres_ao)

@@ -139,27 +139,23 @@ def hegeman_gbuffer(gbuffer, *, scene, shell: str = "sphere", ground: str = "heg
     Hegeman, Premoze, Ashikhmin & Drettakis, "Approximate Ambient Occlusion For Trees",
     I3D 2006, Sec. 3, Eqs. 4-8.
     """
-    H, W = gbuffer.valid.shape
-    out = np.full((H, W), np.nan)
-    valid = gbuffer.valid
-    if not valid.any():
-        return out
-    canopy = canopy_shell(scene, kind=shell, k=k)
-    alpha_rho = scene_density(scene, canopy) if density is None else float(density)
-    x = np.asarray(gbuffer.world_position, dtype=np.float64)[valid]
-    n = np.asarray(gbuffer.world_normal, dtype=np.float64)[valid]
-    names = list(scene.meshes)
-    mesh = scene.mesh_index[np.asarray(gbuffer.primitive)[valid]]
-    on_ground = (mesh == names.index(GROUND_MESH)) if GROUND_MESH in names else np.zeros(len(x), bool)
-    v = np.empty(len(x))
-    if (~on_ground).any():
-        v[~on_ground] = canopy_visibility(x[~on_ground], n[~on_ground], canopy, density=alpha_rho)
-    if on_ground.any():
-        sphere = bounding_sphere(_canopy_points(scene))
-        sigma = 2.0 * np.pi * sphere.radius ** 2 * alpha_rho / 3.0 if ground == "porous" else None
-        v[on_ground] = occluder_visibility(x[on_ground], n[on_ground], sphere, model=ground, sigma=sigma)
-    out[valid] = v
-    return out
+
+    def model(x, n):
+        canopy = canopy_shell(scene, kind=shell, k=k)
+        alpha_rho = scene_density(scene, canopy) if density is None else float(density)
+        names = list(scene.meshes)
+        mesh = scene.mesh_index[np.asarray(gbuffer.primitive)[gbuffer.valid]]
+        on_ground = (mesh == names.index(GROUND_MESH)) if GROUND_MESH in names else np.zeros(len(x), bool)
+        v = np.empty(len(x))
+        if (~on_ground).any():
+            v[~on_ground] = canopy_visibility(x[~on_ground], n[~on_ground], canopy, density=alpha_rho)
+        if on_ground.any():
+            sphere = bounding_sphere(_canopy_points(scene))
+            sigma = 2.0 * np.pi * sphere.radius ** 2 * alpha_rho / 3.0 if ground == "porous" else None
+            v[on_ground] = occluder_visibility(x[on_ground], n[on_ground], sphere, model=ground, sigma=sigma)
+        return v
+
+    return gbuffer.per_pixel(model)
 
 
 def scene_extinction(scene, shell) -> float:
@@ -221,18 +217,14 @@ def poisson_gbuffer(gbuffer, *, scene, shell: str = "sphere", weighting: str = "
     Hegeman, Premoze, Ashikhmin & Drettakis, "Approximate Ambient Occlusion For Trees",
     I3D 2006, Sec. 3 (the Poisson argument, whose expectation this evaluates exactly).
     """
-    H, W = gbuffer.valid.shape
-    out = np.full((H, W), np.nan)
-    valid = gbuffer.valid
-    if not valid.any():
-        return out
-    canopy = canopy_shell(scene, kind=shell, k=k)
-    meta = scene.metadata
-    sigma = extinction(meta["n_leaves"], meta["leaf_area"], canopy)
-    x = np.asarray(gbuffer.world_position, dtype=np.float64)[valid]
-    n = np.asarray(gbuffer.world_normal, dtype=np.float64)[valid]
-    out[valid] = poisson_visibility(x, n, canopy, extinction=sigma, weighting=weighting)
-    return out
+
+    def model(x, n):
+        canopy = canopy_shell(scene, kind=shell, k=k)
+        meta = scene.metadata
+        sigma = extinction(meta["n_leaves"], meta["leaf_area"], canopy)
+        return poisson_visibility(x, n, canopy, extinction=sigma, weighting=weighting)
+
+    return gbuffer.per_pixel(model)
 
 
 def reeves_blau_gbuffer(gbuffer, *, scene, k=None, radius=None, normal_clamp: bool = False, thickness=None,
@@ -264,10 +256,9 @@ def reeves_blau_gbuffer(gbuffer, *, scene, k=None, radius=None, normal_clamp: bo
     Reeves & Blau, "Approximate and probabilistic algorithms for shading and rendering
     structured particle systems", SIGGRAPH 1985; compared in Hegeman et al. 2006, Figs. 4, 12.
     """
-    out = np.full(gbuffer.valid.shape, np.nan)
-    if not gbuffer.valid.any():
-        return out
-    shell = canopy_shell(scene)
-    k = scene_extinction(scene, shell) if k is None else float(k)
-    out[gbuffer.valid] = reeves_blau(np.asarray(gbuffer.world_position, dtype=np.float64)[gbuffer.valid], shell, k=k)
-    return out
+
+    def model(x, n):
+        shell = canopy_shell(scene)
+        return reeves_blau(x, shell, k=scene_extinction(scene, shell) if k is None else float(k))
+
+    return gbuffer.per_pixel(model)
