@@ -60,18 +60,25 @@ def _stats(est, ref, stderr) -> dict:
             "ref_stderr": float(np.mean(stderr))}
 
 
-def objectspace_rows(scenes=tuple(SCENES), *, terms=TERMS, quick: bool = False, seed: int = 0) -> list[dict]:
-    """One row per (scene, where, term, variant, weighting): RMSE, bias and correlation of
-    Bunnell's disks against ray-cast AO without a distance limit, and the reference's mean
-    standard error. ``where`` is "vertex" (a random subset of the disks) or "pixel" (the
-    scene's suggested view). Scenes whose data is absent (the bunny) are left out."""
-    rows = []
+def _disks_of(scenes):
+    """(name, scene, max_edge, disk centres, disk normals) of each scene whose data is
+    present (the bunny may be absent), with the subdivision :data:`SCENES` gives it."""
     for name in scenes:
         scene = scene_for(name)
         if scene is None:
             continue
         max_edge = SCENES.get(name)
         p, n, _ = vertex_disks(scene, max_edge=max_edge)
+        yield name, scene, max_edge, p, n
+
+
+def objectspace_rows(scenes=tuple(SCENES), *, terms=TERMS, quick: bool = False, seed: int = 0) -> list[dict]:
+    """One row per (scene, where, term, variant, weighting): RMSE, bias and correlation of
+    Bunnell's disks against ray-cast AO without a distance limit, and the reference's mean
+    standard error. ``where`` is "vertex" (a random subset of the disks) or "pixel" (the
+    scene's suggested view). Scenes whose data is absent (the bunny) are left out."""
+    rows = []
+    for name, scene, max_edge, p, n in _disks_of(scenes):
         disks = len(p)
         pick = np.sort(np.random.default_rng(seed).choice(len(p), size=min(VERTICES[quick], len(p)),
                                                           replace=False))
@@ -105,12 +112,7 @@ def tree_rows(scenes=tuple(SCENES), *, terms=TERMS, receivers: int = 1000, passe
     from ..objectspace import shadow_evaluations
 
     rows = []
-    for name in scenes:
-        scene = scene_for(name)
-        if scene is None:
-            continue
-        max_edge = SCENES.get(name)
-        p, n, _ = vertex_disks(scene, max_edge=max_edge)
+    for name, scene, max_edge, p, n in _disks_of(scenes):
         pick = np.random.default_rng(seed).choice(len(p), size=min(receivers, len(p)), replace=False)
         fraction = shadow_evaluations(scene, p[pick], n[pick], max_edge=max_edge, open_ratio=open_ratio) / (
             len(pick) * len(p))
