@@ -201,11 +201,28 @@ def _cloud(seed=0, k=12, points=40):
     return p, n, c, r
 
 
+#: How far chunking may move a visibility. Chunking changes, per receiver, only how many rows
+#: each BLAS product ``f @ G_j`` of the SH algebra gets, and so possibly which BLAS kernel
+#: computes the receiver's row: the same dot products of length K = n^2, summed in another
+#: order (OpenBLAS picks kernels by shape). Two summation orders of one dot product differ by
+#: at most 2 gamma_K sum |a_i b_i|, gamma_K = K u / (1 - K u), u = 2^-53 (Higham, "Accuracy
+#: and Stability of Numerical Algorithms", 2nd ed., Sec. 3.1). The hybrid exponential squares
+#: its result k times, each squaring at most doubling a relative error (k <= 6 for these
+#: clouds: ||f_hat|| below 2^6 times the squaring threshold), so 2^(k+1) products' worth; the
+#: sum of |terms| is at most n^2 times the result's scale (coefficients bounded by sqrt(4 pi)
+#: times the DC term for these positive visibility functions). Visibilities are in [0, 1]:
+#: 2^7 * 2 gamma_16 * 16 = 7.3e-12 absolute. A chunking bug (a receiver paired with another's
+#: spheres or normal) moves visibilities by 1e-3 or more.
+CHUNK_ATOL = 2.0 ** 7 * 2 * (16 * 2.0 ** -53 / (1 - 16 * 2.0 ** -53)) * 16
+
+
 @pytest.mark.parametrize("method", METHODS)
-def test_chunking_does_not_change_the_result(method):
+@pytest.mark.parametrize("chunk", [1, 3, 7])
+def test_chunking_does_not_change_the_result(method, chunk):
     p, n, c, r = _cloud()
-    np.testing.assert_array_equal(sphere_set_ao(p, n, c, r, method=method, chunk=7),
-                                  sphere_set_ao(p, n, c, r, method=method))
+    whole = sphere_set_ao(p, n, c, r, method=method)
+    np.testing.assert_allclose(sphere_set_ao(p, n, c, r, method=method, chunk=chunk), whole,
+                               rtol=0, atol=CHUNK_ATOL)
 
 
 @pytest.mark.parametrize("method", METHODS)
