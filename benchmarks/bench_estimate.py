@@ -11,7 +11,7 @@ Blender-style EXR (``vobscure.io.write_gbuffer``: ``View Layer.Depth.Z`` and
 - the whole command ``vobscure estimate --depth frame.exr --fov ... --radius ... --out vo.exr``
   in this process (read, convert, ``line:9``, write).
 
-Goal (issue 12): peak extra memory of the command < 100 bytes per pixel. Times are one run's
+Goal: peak extra memory of the command < 100 bytes per pixel. Times are one run's
 on a shared machine.
 
 Run ``python benchmarks/bench_estimate.py [--quick]`` from the repository root.

@@ -1,6 +1,6 @@
 """Object-space AO of vobscure: cost growth over mesh sizes, one section per method.
 
-Section ``bunnell`` (issue 13): Bunnell's disks (``vobscure.objectspace.bunnell``), the exact
+Section ``bunnell``: Bunnell's disks (``vobscure.objectspace.bunnell``), the exact
 O(n^2) sum (``hierarchy=False``) against the tree of aggregated disks (``hierarchy=True``,
 ``open_ratio`` 4), on one family of meshes at growing sizes. The results are ratios and
 log-log slopes of timings taken in the same run; absolute times are context only.
@@ -25,7 +25,7 @@ the tree / exact ratios at the largest size both ran.
 Timings are the median (``--repeats``) of interleaved rounds after one warm-up call
 (``_bench.interleaved``); the sizes above 2562 disks get one round.
 
-Section ``spheres`` (issue 15): Ren et al. 2006's sphere sets in SH
+Section ``spheres``: Ren et al. 2006's sphere sets in SH
 (``vobscure.objectspace.sphere_set_ao``). Receivers on a plane under 1 to 256 spheres (1 to 64
 with ``--quick``) of the same total volume; per SH order (4 and 6; 4 with ``--quick``) and
 count, the median time per receiver of ``method="product"`` (one SH product per sphere),
@@ -134,7 +134,7 @@ def bench_bunnell(args, report: Report):
 
 
 # --------------------------------------------------------------------------- sphere sets
-#: Sphere counts of the ``spheres`` section (Ren et al. 2006, issue 15).
+#: Sphere counts of the ``spheres`` section (Ren et al. 2006).
 SPHERE_COUNTS = {False: (1, 2, 4, 8, 16, 32, 64, 128, 256), True: (1, 4, 16, 64)}
 #: SH orders timed (order n = n^2 coefficients).
 SPHERE_ORDERS = {False: (4, 6), True: (4,)}

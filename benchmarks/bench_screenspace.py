@@ -112,7 +112,7 @@ RADIUS = 0.3
 #: the timed configurations (registry Configs, each method's default fetch), each run with
 #: normal_clamp False and True
 CONFIGS = (Config("point", 12), Config("point", 33), Config("line", 5), Config("line", 9), Config("area", 1))
-#: the engines' baselines (issue 13), timed without the normal clamp (they estimate AO, which
+#: the engines' baselines, timed without the normal clamp (they estimate AO, which
 #: has no clamp): GTAO "high" (3 slices x 3 steps a side) and SAO with 12 taps
 BASELINES = (Config("gtao", 3), Config("sao", 12))
 #: baselines timed beside them without a goal: Alchemy AO with 12 taps shares SAO's code

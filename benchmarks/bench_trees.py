@@ -23,11 +23,11 @@ from and across the crown. At 10^6 and 10^7 points (10^5 and 10^6 with ``--quick
   the raw copy.
 - **canopy, sphere** / **canopy, ellipsoid**: ``vobscure.trees.canopy_visibility`` (Eqs.
   4-6) on ``Sphere((0, 0, 0), 1.5)`` and on ``Ellipsoid((0, 0, 0), (2.0, 1.2, 0.9))``
-  rotated off the axes, density 0.3. Goals (issue 11): <= 8x and <= 12x the floor.
+  rotated off the axes, density 0.3. Goals: <= 8x and <= 12x the floor.
 - **poisson, sphere** / **poisson, ellipsoid**: ``vobscure.trees.poisson_visibility`` (the
   Poisson leaf cloud's expected visibility, cosine weighting, extinction 1) on the same
   shells: a bilinear lookup in a (rho, u) table summed once per call for the call's sigma R.
-  Goal (issue 15): <= 2x ``canopy_visibility`` on the same shell, timed in the same
+  Goal: <= 2x ``canopy_visibility`` on the same shell, timed in the same
   interleaved rounds (the summary prints the ratios). The table's geometry is built once per
   process, at the first call: that first call is timed on its own, before everything else
   (``poisson table build``), and is not part of the ratios.
@@ -41,8 +41,8 @@ from and across the crown. At 10^6 and 10^7 points (10^5 and 10^6 with ``--quick
   arrays; its own floor is ``np.add(height, cos_theta, out=out)`` (reads 16 B, writes
   8 B per point), the "grass floor".
 - **peak B/pt**: peak extra memory per point, ``tracemalloc`` started after the inputs are
-  built, one call, peak / n. It includes the returned (n,) float64 array (8 B/pt). Goal
-  (issue 11): < 100 B/pt for every model. The models work on chunks (``chunk``), so this
+  built, one call, peak / n. It includes the returned (n,) float64 array (8 B/pt). Goal:
+  < 100 B/pt for every model. The models work on chunks (``chunk``), so this
   does not grow with n.
 
 Run from the repository root::
@@ -90,11 +90,11 @@ ELLIPSOID = Ellipsoid((0.0, 0.0, 0.0), (2.0, 1.2, 0.9),
 DENSITY = 0.3        # alpha rho of the canopy model
 SIGMA = 1.0          # extinction of the porous occluder
 BLADE_HEIGHT = 0.3
-#: issue 11's goals: canopy_visibility against the floor, and memory per point
+#: the goals: canopy_visibility against the floor, and memory per point
 GOAL_CANOPY_SPHERE = 8.0
 GOAL_CANOPY_ELLIPSOID = 12.0
 GOAL_PEAK_BYTES = 100.0
-#: issue 15's goal: poisson_visibility against canopy_visibility on the same shell
+#: the goal: poisson_visibility against canopy_visibility on the same shell
 GOAL_POISSON_VS_CANOPY = 2.0
 
 
