@@ -72,7 +72,9 @@ def test_api_pages_render_the_docstrings(site):
     # every page renders its ::: directives; spot-check one object per module page
     expected = {
         "camera": "vobscure.camera.Camera",
-        "gbuffer": "vobscure.gbuffer.render_gbuffer",
+        "gbuffer": "vobscure.gbuffer.GBuffer",
+        "render": "vobscure.render.render_gbuffer",
+        "convert": "vobscure.convert.convert_buffers",
         "groundtruth": "vobscure.groundtruth.ground_truth",
         "screenspace": "vobscure.screenspace.line.vo_line",
         "metrics": "vobscure.metrics.error",

@@ -89,7 +89,7 @@ def test_line_taps_are_the_fetches_vo_line_makes(gb, monkeypatch, samples):
 
 @pytest.mark.parametrize("samples", [1, 3])
 def test_area_taps_are_the_lookups_vo_area_makes(gb, monkeypatch, samples):
-    calls = _count(monkeypatch, area._Pyramid, "lookup", lambda a, k: np.size(a[1]))
+    calls = _count(monkeypatch, area.MomentPyramid, "lookup", lambda a, k: np.size(a[1]))
     vo.vo_area(gb, radius=0.2, samples=samples)
     assert sum(calls) / gb.valid.sum() == methods.get("area").taps(samples) == samples
 

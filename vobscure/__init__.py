@@ -9,10 +9,11 @@ from importlib.metadata import PackageNotFoundError, version as _version
 from . import scenes
 from .camera import Camera
 from .estimate import Estimate
-from .gbuffer import GBuffer, NormalsRenormalizedWarning, NormalsRepairedWarning, render_gbuffer
+from .gbuffer import GBuffer, NormalsRenormalizedWarning, NormalsRepairedWarning
 from .groundtruth import ambient_occlusion, ground_truth, obscurance, volumetric_obscurance
 from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flicker
 from .raytrace import Tracer
+from .render import render_gbuffer
 from .scenes import Scene
 from .screenspace import bilateral_blur, combine_radii, vo_area, vo_line, vo_point, vo_reference
 from . import methods, objectspace, patterns, shading, trees

@@ -1,11 +1,12 @@
-"""GBuffer.from_arrays: other renderers' depth and normal conventions converted to the library's.
+"""vobscure.convert through GBuffer.from_arrays and GBuffer.derive_normals: other renderers'
+depth and normal conventions converted to the library's.
 
 Every forward conversion here (what OpenGL, Direct3D, a reversed-Z pipeline, a ray tracer or
 a packed-normal G-buffer would have written) is computed the way those APIs do it: by
 applying their projection matrices (glFrustum / glOrtho, D3DXMatrixPerspectiveFovLH /
 D3DXMatrixOrthoLH, as printed on their reference pages) to view-space points, and a
 gluLookAt view matrix to world-space normals. None of it calls the inverse formulas of
-``vobscure.gbuffer``.
+``vobscure.convert``.
 """
 
 from __future__ import annotations
