@@ -275,15 +275,9 @@ class Camera:
         return self._lens.camera_repr(self._pose)
 
     # ------------------------------------------------------------------ parts
-    @property
-    def lens(self) -> Projection:
-        """The projection (:class:`Perspective`, :class:`Orthographic` or :class:`Intrinsics`)."""
-        return self._lens
-
-    @property
-    def extrinsics(self) -> Pose | None:
-        """The pose as a :class:`Pose` (view -> world), None without a pose."""
-        return self._pose
+    lens = property(lambda self: self._lens, doc="The :class:`Projection` (:class:`Perspective`, "
+                    ":class:`Orthographic` or :class:`Intrinsics`).")
+    extrinsics = property(lambda self: self._pose, doc="The :class:`Pose` (view -> world), None without a pose.")
 
     def _need_pose(self, what: str) -> Pose:
         """The pose, or the ValueError that names ``Camera.<what>``."""
