@@ -33,6 +33,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from .._validate import as_rng, check_choice, check_int, check_positive
+from ..camera.kernel import ray_to_xy, ray_xy
 from ..gbuffer import GBuffer
 from ..patterns import SamplePattern, ball, disk
 
@@ -75,19 +76,16 @@ class Pixels:
     def ray(self) -> tuple[np.ndarray, np.ndarray]:
         """(x / z, y / z) of the pixels' view rays (perspective), or their view-space (x, y)
         (orthographic): the pixel centre's offset from the principal point (cx, cy) over
-        ``fx`` and ``fy``."""
-        return (self.col + (0.5 - self.cx)) / self.fx, ((self.cy - 0.5) - self.row) / self.fy
+        ``fx`` and ``fy``: the kernel's ray of the column and row indices, whose centres are
+        half a pixel past them."""
+        return ray_xy(self.col, self.row, self.fx, self.fy, self.cx - 0.5, self.cy - 0.5)
 
     @cached_property
     def p(self) -> np.ndarray:
         """(k, 3) view-space positions (stored column by column, see :attr:`n`)."""
         rx, ry = self.ray
         p = np.empty((3, len(self.index))).T
-        if self.perspective:
-            np.multiply(rx, self.z, out=p[:, 0])
-            np.multiply(ry, self.z, out=p[:, 1])
-        else:
-            p[:, 0], p[:, 1] = rx, ry
+        ray_to_xy(rx, ry, self.z, self.perspective, out=(p[:, 0], p[:, 1]))
         p[:, 2] = self.z
         return p
 

@@ -509,7 +509,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
 #: "max": one lookup sized by the longer axis (conservative: never under-filters, but
 #: blurs the short axis N times too much); "geometric": one lookup of side
 #: sqrt(s_long s_short) (the footprint's area, but the wrong shape). Measured with fx = 2 fy
-#: on the crease, mean |V_wide - V_square| over the image (tests/test_intrinsics.py,
+#: on the crease, mean |V_wide - V_square| over the image (tests/test_camera.py,
 #: ``test_area_anisotropic_footprint``), 1 / 5 samples: "probes" 0.0055 / 0.0053,
 #: "geometric" 0.0377 / 0.0114, "max" 0.0609 / 0.0255. Square pixels are unaffected (one
 #: lookup, as before).

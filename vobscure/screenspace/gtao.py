@@ -18,6 +18,7 @@ from functools import partial
 
 import numpy as np
 
+from ..camera.kernel import ray_to_xy, shift_ray
 from . import _common as C
 
 __all__ = ["gtao", "gtao_bent_normals", "PRESETS"]
@@ -338,10 +339,8 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
                                       reciprocal=px.perspective)
                     ok = np.isfinite(d) & (d > 0) & ((dj != 0) | (de != 0))
                     d = np.where(ok, d, pz_)
-                    # the tap's view-space position (Pixels.ray at the tap), minus p
-                    sx, sy = rx + dj / px.fx, ry + de / px.fy
-                    if px.perspective:
-                        sx, sy = sx * d, sy * d
+                    # the tap's view-space position (the pixel's ray shifted to the tap), minus p
+                    sx, sy = ray_to_xy(*shift_ray(rx, ry, dj, -de, px.fx, px.fy), d, px.perspective)
                     ddx, ddy, ddz = sx - px_, sy - py_, d - pz_
                     dist = np.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
                     ok &= dist > 0

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_choice, check_int, check_positive
+from ..camera.kernel import ray_to_xy, ray_xy
 from . import _common as C
 
 __all__ = ["hbao", "hbao_taps"]
@@ -158,10 +159,8 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
                 depth = C.fetch_depth(px.depth, x, y, offscreen=offscreen)
                 ok = np.isfinite(depth) & ((x != px.center[:, 0]) | (y != px.center[:, 1]))
                 depth = np.where(ok, depth, px.z)
-                # the tap's view-space point S (Camera.project inverted), D = S - P
-                sx, sy = (x - px.cx) / px.fx, (px.cy - y) / px.fy
-                if px.perspective:
-                    sx, sy = sx * depth, sy * depth
+                # the tap's view-space point S (the projection inverted), D = S - P
+                sx, sy = ray_to_xy(*ray_xy(x, y, px.fx, px.fy, px.cx, px.cy), depth, px.perspective)
                 Dx, Dy, Dz = sx - p[:, 0], sy - p[:, 1], depth - px.z
                 r2 = Dx * Dx + Dy * Dy + Dz * Dz
                 ok &= (r2 < R2) & (r2 > 0)

@@ -14,6 +14,7 @@ import numpy as np
 from .._validate import as_rng, check_int
 from ..estimate import DEFAULT_GROUPS, Estimate
 from ..patterns import SamplePattern
+from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
 
@@ -105,15 +106,9 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
             m = 2.0 * np.minimum(o[0] * nc[0] + o[1] * nc[1] + o[2] * nc[2], 0.0)
             o = [o[a] - m * nc[a] for a in range(3)]
         qx, qy, z = (pc[a] + radius * o[a] for a in range(3))
-        # the camera's projection (Camera.project): x = cx + fx X / Z, y = cy - fy Y / Z
-        # (perspective), x = cx + fx X, y = cy - fy Y (orthographic)
-        if px.perspective:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                inv_x = px.fx / z
-                inv_y = inv_x if px.fy == px.fx else px.fy / z
-                x, y = px.cx + qx * inv_x, px.cy - qy * inv_y
-        else:
-            x, y = px.cx + px.fx * qx, px.cy - px.fy * qy
+        # the camera's projection (vobscure.camera.kernel)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x, y = project_xy(qx, qy, z, px.fx, px.fy, px.cx, px.cy, px.perspective)
         d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
         # occupied = 1 - O(x) of Sec. 4 (O = 1 in empty space): behind the depth buffer,
         # within the thickness when one is given (Sec. 4.3); z is the sample's view depth X_z

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_choice, check_int, check_positive
+from ..camera.kernel import ray_to_xy, ray_xy
 from . import _common as C
 
 __all__ = ["alchemy", "sao", "alchemy_taps", "sao_taps"]
@@ -111,18 +112,12 @@ def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offsc
             np.take(depth_nan, flat, out=d)
             if outside is not None:
                 d[outside] = np.nan
-            # Q: the camera's projection inverted at the tap's pixel centre (Camera.project):
-            # X = (x - cx) Z / fx, Y = (cy - y) Z / fy (perspective); without the Z
-            # (orthographic); then v = Q - C
+            # Q: the projection inverted at the tap's pixel centre (vobscure.camera.kernel),
+            # in place; then v = Q - C
             np.add(x, 0.5, out=vx)
-            vx -= px.cx
-            vx /= px.fx
             np.add(y, 0.5, out=vy)
-            np.subtract(px.cy, vy, out=vy)
-            vy /= px.fy
-            if px.perspective:
-                vx *= d
-                vy *= d
+            ray_xy(vx, vy, px.fx, px.fy, px.cx, px.cy, out=(vx, vy))
+            ray_to_xy(vx, vy, d, px.perspective, out=(vx, vy))
             vx -= p_x
             vy -= p_y
             np.subtract(d, px.z, out=vz)
