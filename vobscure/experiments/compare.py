@@ -294,9 +294,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                 references += (own,)
     references = tuple(references)
     if not references:
-        raise ValueError("references must name at least one of " + ", ".join(REFERENCES))
+        raise ValueError("references must name at least one of " + ", ".join(_references.names()))
     for name in references:
-        check_choice(name, "references", REFERENCES)
+        check_choice(name, "references", _references.names())
     repeats = check_int(repeats, "repeats")
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
     if thickness is not None:
@@ -463,7 +463,8 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
             and (q is None or _methods.QUANTITIES[q].screen_limit)
 
     keys |= {("screen", r["radius"], "screen_rmse") for r in shippable if screen_limited(r)}
-    for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", REFERENCES.index(k[0]))):
+    order = _references.names()
+    for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", order.index(k[0]))):
         sel = [r for r in shippable if r["radius"] == radius and np.isfinite(r.get(col, np.nan))
                and (r.get("own_reference") == ref if col == "own_rmse" else screen_limited(r))]
         if not sel:
@@ -657,7 +658,7 @@ def _gallery(path, rows, refs, images, gb):
     radius = rows[0]["radius"]
     ref_imgs = refs[radius]
     # the world-space truth when there is one, else the first in the registry's order
-    primary = "volumetric" if "volumetric" in ref_imgs else next(n for n in REFERENCES if n in ref_imgs)
+    primary = "volumetric" if "volumetric" in ref_imgs else next(n for n in _references.names() if n in ref_imgs)
     configs = [row["label"] for row in rows if row["radius"] == radius]
     ncol = max(len(ref_imgs), 4)
     per_row = max(ncol // 2, 1)

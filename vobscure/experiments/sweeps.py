@@ -120,11 +120,13 @@ class SweepConfig:
         Timed runs after the untimed first call; the median is reported. 0: not timed
         (``seconds`` is NaN), for configurations that only measure error.
     references : tuple of str
-        Some of :data:`REFERENCES` (a single name is accepted): ``"screen"``,
-        ``"volumetric"``, ``"ao"`` and ``"obscurance"`` (within the radius), ``"sky"`` and
-        ``"sky_uniform"`` (ambient occlusion with no distance limit, cosine-weighted or uniform).
+        Names of the reference registry :data:`vobscure.references.REFERENCES` (a single
+        name is accepted): ``"screen"``, ``"volumetric"``, ``"ao"`` and ``"obscurance"``
+        (within the radius), ``"sky"`` and ``"sky_uniform"`` (ambient occlusion with no
+        distance limit, cosine-weighted or uniform), ... Each entry says which sampling
+        parameter below it uses (:attr:`vobscure.references.Reference.samples`).
     rays : int
-        Rays per pixel of the ray-cast ``ao`` and ``obscurance`` references (directions).
+        Rays per pixel (directions) of the ray-cast references but ``volumetric``.
     volume_samples : int
         Points per ball of the world-space ``volumetric`` reference.
     screen_samples : int
@@ -172,7 +174,7 @@ class SweepConfig:
         if isinstance(self.scene, GBuffer):
             put(self, "camera", self.scene.camera)
             refs = (self.references,) if isinstance(self.references, str) else tuple(self.references)
-            if any(r not in REFERENCES or _references.get(r).needs_scene for r in refs):
+            if any(r not in _references.REFERENCES or _references.get(r).needs_scene for r in refs):
                 raise ValueError(f"references {refs} need the scene's geometry; a G-buffer alone has only the "
                                  f"converged screen-space reference, references=('screen',)")
         config = _methods.Config(_methods.get(self.method).name, self.samples, fetch=self.fetch)
@@ -199,7 +201,7 @@ class SweepConfig:
         put(self, "repeats", check_int(self.repeats, "repeats", minimum=0))
         refs = (self.references,) if isinstance(self.references, str) else tuple(self.references)
         for r in refs:
-            check_choice(r, "references", REFERENCES)
+            check_choice(r, "references", _references.names())
         if len(set(refs)) != len(refs):
             raise ValueError(f"references must not repeat a name, got {refs}")
         put(self, "references", refs)
@@ -325,7 +327,7 @@ class SweepResult:
             "taps_per_pixel": self.taps_per_pixel, "texels_per_pixel": self.texels_per_pixel,
             "pixels": self.pixels, "quantity": c.quantity, "own_reference": c.own_reference,
         }
-        for ref in sorted(c.references, key=REFERENCES.index):
+        for ref in sorted(c.references, key=_references.names().index):
             report = self.errors[ref].as_dict()
             for stat in ERROR_STATS:
                 row[f"{stat}_{ref}"] = report[stat]
@@ -587,7 +589,7 @@ def _rows(results) -> tuple[list[dict], list[str]]:
     # even when the first rows lack them
     present = {k for row in rows for k in row}
     canonical = list(_COLUMNS_HEAD)
-    canonical += [f"{stat}_{ref}" for ref in REFERENCES for stat in ERROR_STATS]
+    canonical += [f"{stat}_{ref}" for ref in _references.names() for stat in ERROR_STATS]
     canonical += [f"{term}_{stat}" for term in DECOMPOSITION_TERMS for stat in ("rmse", "bias", "mae")]
     canonical += ["decomposition_target", *_COLUMNS_TAIL]
     columns = [k for k in canonical if k in present]
