@@ -7,11 +7,16 @@ Each entry (:class:`Method`) says what a method is and what it costs:
 - ``taps(n)``, the depth-buffer taps per pixel it makes with ``n`` samples, and
   ``texels(n)``, the texels those taps read (the cost model of DESIGN.md);
 - the quantity it estimates (:data:`QUANTITIES`: ball VO, half-ball VO, cosine AO,
-  obscurance) and so the reference it is compared with.
+  obscurance, ..., taken from the reference registry :mod:`vobscure.references`) and so the
+  reference it is compared with.
+
+:meth:`Method.run` returns the (H, W) image and passes the function the options it takes
+(:func:`filter_options`); :meth:`Method.estimate` gives the standard error of a method that
+has one.
 
 ``vobscure compare``, :func:`vobscure.experiments.sweep`, the claims of Loos & Sloan, the
 figures and the benchmarks read it; ``vobscure compare --help`` lists it. Adding an estimator
-is one function plus one :func:`register` call (``docs/screenspace.md``, "Adding an
+is one function plus one :func:`register` call (``docs/methods.md``, "Adding an
 estimator"). A configuration -- a method with a sample count and, optionally, another fetch
 -- is a :class:`Config`, written ``NAME:SAMPLES[:FETCH]`` (``line:9``, ``point:12:nearest``).
 
