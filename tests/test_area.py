@@ -221,8 +221,8 @@ def test_plane_reads_one_clamped_everywhere_and_in_every_variant(plane_gbuffers,
     # coverage or padding: no interior margin is needed, and the trilinear tent's
     # position-dependent spread no longer matters
     gb = plane_gbuffers[camera]
-    for kw in (dict(), dict(prefilter=True), dict(falloff="quadratic"), dict(reconstruction="trilinear"),
-               dict(thickness=0.6), dict(offscreen="open"), dict(model="gaussian", reconstruction="trilinear")):
+    for kw in (dict(), dict(prefilter=True), dict(falloff="quadratic"), dict(fetch="trilinear"),
+               dict(thickness=0.6), dict(offscreen="open"), dict(model="gaussian", fetch="trilinear")):
         v = vo_area(gb, radius=0.3, samples=5, normal_clamp=True, **kw)
         np.testing.assert_allclose(v[gb.valid], 1.0, rtol=0, atol=PLANE_TOL)
 
@@ -232,10 +232,10 @@ def test_tilted_plane_unclamped_trilinear_is_not_symmetric(plane_gbuffers):
     # sub-texel position, so antipodal samples of a tilted plane see different sigmas
     gb = plane_gbuffers["perspective"]
     inside = _interior(gb, 0.3, 9, "trilinear")
-    v = vo_area(gb, radius=0.3, samples=9, model="gaussian", reconstruction="trilinear")
+    v = vo_area(gb, radius=0.3, samples=9, model="gaussian", fetch="trilinear")
     assert np.max(np.abs(v[inside] - 0.5)) > PLANE_TOL
     # the single centre sample is symmetric whatever sigma is
-    v1 = vo_area(gb, radius=0.3, samples=1, reconstruction="trilinear")
+    v1 = vo_area(gb, radius=0.3, samples=1, fetch="trilinear")
     np.testing.assert_allclose(v1[_interior(gb, 0.3, 1, "trilinear")], 0.5, atol=PLANE_TOL)
 
 
@@ -448,7 +448,7 @@ def test_offscreen_policies(crease_ortho):
     (dict(thickness=-0.1), "thickness"),
     (dict(falloff="linear"), "falloff"),
     (dict(offscreen="wrap"), "offscreen"),
-    (dict(reconstruction="bicubic"), "reconstruction"),
+    (dict(fetch="bicubic"), "fetch"),
     (dict(noise_size=0), "noise_size"),
     (dict(lod_bias=float("nan")), "lod_bias"),
     (dict(lod_bias="fine"), "lod_bias"),

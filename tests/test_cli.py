@@ -39,6 +39,24 @@ def test_scenes_lists_registry(capsys):
         assert name in out
 
 
+def test_compare_help_and_choices_come_from_the_registries(capsys):
+    """``--reference`` accepts the reference registry's names and ``--help`` lists every
+    reference and method with its summary; a name outside the registry is refused."""
+    from vobscure import methods, references
+
+    with pytest.raises(SystemExit):
+        cli.main(["compare", "--help"])
+    out = " ".join(capsys.readouterr().out.split())        # argparse wraps lines
+    for ref in references.REFERENCES.values():
+        assert f"{ref.name}: {' '.join(ref.summary.split())}" in out
+    for name in methods.names():
+        assert f"{name} (" in out
+    with pytest.raises(SystemExit):
+        cli.main(["compare", "--reference", "fog"])
+    err = capsys.readouterr().err
+    assert "invalid choice: 'fog'" in err and "sky_uniform" in err
+
+
 def test_bad_scene_is_a_clean_error(tmp_path, capsys):
     assert cli.main(["render", "--scene", "nosuchscene", "--out", str(tmp_path), "--quiet"]) == 2
     assert "nosuchscene" in capsys.readouterr().err

@@ -91,7 +91,7 @@ def test_interrupted_run_keeps_the_previous_files(first_run, monkeypatch):
 
 
 def test_only_requested_references_are_computed(tmp_path, monkeypatch):
-    from vobscure.experiments import cache, sweep
+    from vobscure.experiments import cache, sweeps
 
     calls = []
     real_screen, real_truth = cache.screen_reference_cached, cache.ground_truth_cached
@@ -102,7 +102,7 @@ def test_only_requested_references_are_computed(tmp_path, monkeypatch):
     res = C.compare("slab", size=(16, 16), methods="line:5,point:12", references=("screen",), quick=True,
                     cache=False, progress=False, out=tmp_path, plots=False)
     assert calls == ["screen"]                  # once, shared by both configurations
-    assert sweep._MEMO._data == {}              # the sweep's memory is freed afterwards
+    assert sweeps._MEMO._data == {}              # the sweep's memory is freed afterwards
     assert set(res.references[res.rows[0]["radius"]]) == {"screen"}
     assert not any(k.startswith(("volumetric", "ao", "total_error")) for k in res.rows[0])
 

@@ -14,9 +14,9 @@ import pytest
 
 import vobscure as vo
 from vobscure import _io
-from vobscure.experiments import sweep as S
+from vobscure.experiments import SweepConfig, SweepResult, results_to_csv, results_to_markdown, sweep
+from vobscure.experiments import sweeps as S
 from vobscure.experiments.cache import ReferenceCache
-from vobscure.experiments.sweep import SweepConfig, SweepResult, results_to_csv, results_to_markdown, sweep
 
 SMALL = dict(size=(32, 32), radius=0.5, rays=16, volume_samples=16, screen_samples=128)
 ALL_REFS = ("screen", "volumetric", "ao")
@@ -268,12 +268,12 @@ def test_markdown_table(tmp_path, threaded):
 
 
 def test_the_package_attribute_is_the_sweep_function():
-    """``vobscure.experiments.sweep(configs, executor=...)`` as the issue spells it."""
-    from concurrent.futures import ThreadPoolExecutor
+    """``vobscure.experiments.sweep(configs, executor=...)`` is the function of the module
+    ``vobscure.experiments.sweeps``, a plain module."""
+    import types
 
-    import vobscure as vo
-    from vobscure.experiments.sweep import SweepConfig, sweep
-
+    assert vo.experiments.sweep is S.sweep and vo.experiments.SweepConfig is S.SweepConfig
+    assert type(S) is types.ModuleType
     configs = [SweepConfig("slab", "line", 5, size=(8, 8), radius=0.5, references=("screen",),
                            screen_samples=32)]
     with ThreadPoolExecutor(1) as pool:
@@ -285,7 +285,7 @@ def test_the_package_attribute_is_the_sweep_function():
 def test_sky_references_are_unbounded_ao_with_their_weighting():
     """"sky" / "sky_uniform": ray-cast AO with no distance limit, cosine / uniform weighted --
     the same numbers as ground_truth called directly, and different from AO within the radius."""
-    from vobscure.experiments.sweep import InlineExecutor
+    from vobscure.experiments import InlineExecutor
 
     config = SweepConfig("crease", "line", 5, size=(12, 10), radius=0.2, rays=32,
                          references=("sky", "sky_uniform", "ao"))

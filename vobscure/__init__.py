@@ -15,8 +15,9 @@ from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flic
 from .raytrace import Tracer
 from .render import render_gbuffer
 from .scenes import Scene
-from .screenspace import bilateral_blur, combine_radii, vo_area, vo_line, vo_point, vo_reference
-from . import methods, objectspace, patterns, shading, trees
+from .screenspace import (alchemy, bilateral_blur, combine_radii, gtao, gtao_bent_normals, hbao, sao, vo_area,
+                          vo_line, vo_point, vo_reference)
+from . import io, methods, objectspace, patterns, references, shading, trees
 
 
 def __getattr__(name):
@@ -46,6 +47,7 @@ __all__ = [
     "Scene",
     "Tracer",
     "__version__",
+    "alchemy",
     "ambient_occlusion",
     "bilateral_blur",
     "combine_radii",
@@ -53,11 +55,17 @@ __all__ = [
     "error",
     "experiments",
     "flicker",
+    "gtao",
+    "gtao_bent_normals",
+    "hbao",
+    "io",
     "methods",
     "objectspace",
     "ground_truth",
     "obscurance",
+    "references",
     "render_gbuffer",
+    "sao",
     "scenes",
     "shading",
     "volumetric_obscurance",

@@ -36,8 +36,10 @@ def _parser() -> argparse.ArgumentParser:
                    help=f"a built-in scene name (see `vobscure scenes`) or a mesh file (default {DEFAULT_SCENE})")
     r.add_argument("--size", nargs=2, type=int, metavar=("W", "H"), default=DEFAULT_SIZE,
                    help="image width and height in pixels (default 256 256)")
-    r.add_argument("--quantity", choices=("ao", "obscurance", "volumetric"), default="ao",
-                   help="what to compute (default ao)")
+    from .groundtruth import QUANTITIES
+
+    r.add_argument("--quantity", choices=QUANTITIES, default="ao",
+                   help="what to compute: a quantity of vobscure.ground_truth (default ao)")
     r.add_argument("--radius", type=float, default=None,
                    help="AO ray length / obscurance distance / VO ball radius (default 0.1 x the scene extent)")
     r.add_argument("--rays", type=int, default=256, help="rays per pixel for ao/obscurance (default 256)")
@@ -50,7 +52,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
 
-    from . import methods
+    from . import methods, references
 
     c = sub.add_parser("compare", help="which estimator, with how many samples, at what cost and accuracy",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -60,7 +62,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "write results.csv, results.md, summary.json, tradeoff.png, gallery.png "
                                    "and provenance.json.",
                        epilog="methods (--methods NAME[:SAMPLES[:FETCH]], from vobscure.methods):\n  "
-                              + methods.describe().replace("\n", "\n  "))
+                              + methods.describe().replace("\n", "\n  ")
+                              + "\n\nreferences (--reference NAME ..., from vobscure.references):\n  "
+                              + references.describe().replace("\n", "\n  "))
     c.add_argument("--scene", default=DEFAULT_SCENE, help=f"built-in scene or mesh file (default {DEFAULT_SCENE})")
     c.add_argument("--gbuffer", default=None, metavar="PATH",
                    help="your own frame instead of a scene: a depth (and normal) file read as `vobscure estimate` "
@@ -78,12 +82,10 @@ def _parser() -> argparse.ArgumentParser:
                         "vegetation scene)")
     c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
     c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")
-    from .experiments.sweep import REFERENCES
-
-    c.add_argument("--reference", nargs="+", default=None, choices=REFERENCES,
-                   help="references to compute (default screen volumetric ao; volumetric left out for a scene "
-                        "that is not closed, sky added for a vegetation scene; sky and sky_uniform: AO with "
-                        "no distance limit, cosine-weighted or uniform, what the vegetation models estimate)")
+    c.add_argument("--reference", nargs="+", default=None, choices=references.names(), metavar="NAME",
+                   help=f"references to compute, some of {', '.join(references.names())} (listed below; default "
+                        "screen volumetric ao, and each method's own; volumetric left out for a scene that is not "
+                        "closed, sky added for a vegetation scene)")
     c.add_argument("--repeats", type=int, default=3, help="timed runs per configuration, median kept (default 3)")
     c.add_argument("--rays", type=int, default=256, help="rays per pixel of ao/obscurance (default 256)")
     c.add_argument("--volume-samples", "--samples", dest="volume_samples", type=int, default=1024,
@@ -380,7 +382,7 @@ def _estimate_main(args) -> int:
         stages.update()
         v = config.run(gb, radius=args.radius, normal_clamp=args.normal_clamp, thickness=args.thickness,
                        seed=args.seed)
-        v = np.asarray(getattr(v, "value", v))
+        v = np.asarray(v)
         stages.update()
         if args.blur:
             v = bilateral_blur(v, gb)

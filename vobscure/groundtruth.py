@@ -575,7 +575,9 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
                        progress=progress)
 
 
-#: What :func:`ground_truth` computes.
+#: What :func:`ground_truth` computes (its ``quantity``). The references an estimate is scored
+#: against -- these with a weighting, a distance limit and sampling settings, and the
+#: screen-space VO -- are the registry :data:`vobscure.references.REFERENCES`.
 QUANTITIES = ("ao", "obscurance", "volumetric")
 
 #: The falloff of each quantity when :func:`ground_truth` is given ``falloff=None``.

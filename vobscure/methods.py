@@ -7,11 +7,16 @@ Each entry (:class:`Method`) says what a method is and what it costs:
 - ``taps(n)``, the depth-buffer taps per pixel it makes with ``n`` samples, and
   ``texels(n)``, the texels those taps read (the cost model of DESIGN.md);
 - the quantity it estimates (:data:`QUANTITIES`: ball VO, half-ball VO, cosine AO,
-  obscurance) and so the reference it is compared with.
+  obscurance, ..., taken from the reference registry :mod:`vobscure.references`) and so the
+  reference it is compared with.
+
+:meth:`Method.run` returns the (H, W) image and passes the function the options it takes
+(:func:`filter_options`); :meth:`Method.estimate` gives the standard error of a method that
+has one.
 
 ``vobscure compare``, :func:`vobscure.experiments.sweep`, the claims of Loos & Sloan, the
 figures and the benchmarks read it; ``vobscure compare --help`` lists it. Adding an estimator
-is one function plus one :func:`register` call (``docs/screenspace.md``, "Adding an
+is one function plus one :func:`register` call (``docs/methods.md``, "Adding an
 estimator"). A configuration -- a method with a sample count and, optionally, another fetch
 -- is a :class:`Config`, written ``NAME:SAMPLES[:FETCH]`` (``line:9``, ``point:12:nearest``).
 
@@ -29,15 +34,21 @@ Examples
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import partial
 
-from .estimate import DEFAULT_GROUPS
+import numpy as np
+
+from .estimate import DEFAULT_GROUPS, Estimate
+from .objectspace import bunnell_gbuffer, sphere_set_gbuffer
+from .references import QUANTITIES, Quantity
 from .screenspace import alchemy, gtao, hbao, point_taps, sao, vo_area, vo_line, vo_point, vo_reference
-from .trees.pixels import hegeman_gbuffer, reeves_blau_gbuffer
+from .trees.pixels import hegeman_gbuffer, poisson_gbuffer, reeves_blau_gbuffer
 
 __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
-           "parse", "unregister"]
+           "parse", "unregister", "filter_options"]
 
 #: Depth texels one tap reads with each fetch: a nearest fetch reads one texel, a bilinear
 #: fetch 2 x 2; ``vo_area``'s mip-map lookup reads two levels of 2 x 2 (trilinear) or 3 x 3
@@ -46,43 +57,29 @@ __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "regi
 TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18, "none": 0}
 
 
-@dataclass(frozen=True)
-class Quantity:
-    """A quantity an estimator estimates, and the reference (``ground_truth`` quantity) that
-    measures it.
+def _parameters(function) -> frozenset | None:
+    """The keywords ``function(gbuffer, ...)`` takes after the G-buffer; None when it takes
+    any keyword (``**kwargs``)."""
+    params = list(inspect.signature(function).parameters.values())[1:]
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
+        return None
+    return frozenset(p.name for p in params if p.kind in (inspect.Parameter.KEYWORD_ONLY,
+                                                          inspect.Parameter.POSITIONAL_OR_KEYWORD))
 
-    Attributes
-    ----------
-    name : str
-        Human-readable name, e.g. ``"half-ball VO"``.
-    reference : str
-        The reference of :mod:`vobscure.experiments.compare` that computes it exactly:
-        ``"volumetric"`` (world-space VO, with ``normal_clamp`` as given), ``"ao"`` (cosine AO
-        within the radius) or ``"obscurance"``.
-    normal_clamp : bool or None
-        The ``normal_clamp`` of the reference (None: not applicable).
-    screen_limit : bool
-        Whether :func:`vobscure.vo_reference` (the converged screen-space VO) is the
-        estimator's limit with infinitely many samples, so that its error against it is the
-        sampling error alone.
+
+def filter_options(function, options: dict) -> dict:
+    """The ``options`` that ``function`` takes (all of them when it takes ``**kwargs``): the
+    one place where the options an experiment passes to every method are fitted to each.
+
+    Examples
+    --------
+    >>> def f(gbuffer, *, radius, seed=0):
+    ...     return radius
+    >>> filter_options(f, dict(radius=0.5, normal_clamp=True, seed=1))
+    {'radius': 0.5, 'seed': 1}
     """
-
-    name: str
-    reference: str
-    normal_clamp: bool | None = None
-    screen_limit: bool = False
-
-
-#: The quantities, by name.
-QUANTITIES = {
-    "ball VO": Quantity("ball VO", "volumetric", normal_clamp=False, screen_limit=True),
-    "half-ball VO": Quantity("half-ball VO", "volumetric", normal_clamp=True, screen_limit=True),
-    "cosine AO": Quantity("cosine AO", "ao"),
-    "uniform AO": Quantity("uniform AO", "ao_uniform"),
-    "sky visibility": Quantity("sky visibility", "sky"),
-    "uniform sky visibility": Quantity("uniform sky visibility", "sky_uniform"),
-    "obscurance": Quantity("obscurance", "obscurance"),
-}
+    accepted = _parameters(function)
+    return dict(options) if accepted is None else {k: v for k, v in options.items() if k in accepted}
 
 
 def _vo_quantity(normal_clamp: bool = False) -> str:
@@ -109,8 +106,9 @@ class Method:
     name : str
         Registry key, as written in ``--methods`` (``"line"``).
     function : callable
-        ``function(gbuffer, *, radius, <samples>=n, normal_clamp, thickness, seed, ...)``
-        returning an (H, W) visibility image (or an :class:`~vobscure.Estimate`).
+        ``function(gbuffer, *, radius, <samples>=n, ...)`` returning an (H, W) visibility
+        image (or an :class:`~vobscure.Estimate`, whose value :meth:`run` returns). It takes
+        the options it uses, by name (:func:`filter_options` passes it those).
     default_samples : int
         The sample count of a configuration that gives none.
     fetch : str
@@ -120,8 +118,9 @@ class Method:
     quantity : callable
         ``quantity(normal_clamp) -> str``: a key of :data:`QUANTITIES`.
     samples : str or None
-        The keyword of ``function`` that counts samples; None for a model without samples
-        (the count of its configurations is then 1 and is not passed).
+        The keyword of ``function`` that counts samples (``samples``, GTAO's ``slices``,
+        HBAO's ``directions``: the table of ``docs/methods.md``); None for a model without
+        samples (the count of its configurations is then 1 and is not passed).
     fetch_parameter : str or None
         The keyword of ``function`` that selects the fetch (None: fixed).
     summary : str
@@ -151,6 +150,7 @@ class Method:
     summary: str = ""
     reference_only: bool = False
     needs_scene: bool = False
+    _parameters: frozenset | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
@@ -160,6 +160,7 @@ class Method:
         if self.fetch not in TEXELS_PER_TAP:
             raise ValueError(f"Method {self.name!r}: fetch must be one of {', '.join(TEXELS_PER_TAP)}, "
                              f"got {self.fetch!r}")
+        object.__setattr__(self, "_parameters", _parameters(self.function))
 
     def texels(self, n: int, fetch: str | None = None) -> int:
         """Depth texels read per pixel with ``n`` samples: ``taps(n)`` x texels per tap of
@@ -170,9 +171,17 @@ class Method:
         """The reference the method's estimate is scored against (its own quantity's)."""
         return QUANTITIES[self.quantity(normal_clamp)].reference
 
-    def run(self, gbuffer, samples: int | None = None, *, fetch: str | None = None, **kwargs):
-        """Call the function with ``samples`` (default :attr:`default_samples`) and, when
-        given, another ``fetch``; other keywords are passed on."""
+    def _call(self, gbuffer, samples, fetch, options):
+        """The function's own result, with the sample count, the fetch and the options it takes."""
+        if self.samples is not None and self.samples in options:
+            raise ValueError(f"method {self.name!r}: give its sample count as samples=, not {self.samples}=")
+        if self.fetch_parameter is not None and self.fetch_parameter in options:
+            raise ValueError(f"method {self.name!r}: give its depth fetch as fetch=, not {self.fetch_parameter}=")
+        unknown = sorted(k for k in options if not _anyone_takes(k))
+        if unknown:
+            raise ValueError(f"no registered method takes the option(s) {', '.join(map(repr, unknown))}; "
+                             f"method {self.name!r} takes {', '.join(sorted(self._parameters or ()))}")
+        kwargs = options if self._parameters is None else {k: v for k, v in options.items() if k in self._parameters}
         if self.samples is not None:
             kwargs[self.samples] = self.default_samples if samples is None else samples
         if fetch is not None:
@@ -180,6 +189,50 @@ class Method:
                 raise ValueError(f"method {self.name!r} has a fixed fetch; got fetch={fetch!r}")
             kwargs[self.fetch_parameter] = fetch
         return self.function(gbuffer, **kwargs)
+
+    def run(self, gbuffer, samples: int | None = None, *, fetch: str | None = None, **options) -> np.ndarray:
+        """The (H, W) visibility image: the function called with ``samples`` (default
+        :attr:`default_samples`) as its :attr:`samples` keyword, ``fetch`` (default the
+        method's own) as its :attr:`fetch_parameter`, and those of ``options`` it takes.
+
+        The experiments pass every method the same options (``radius``, ``normal_clamp``,
+        ``thickness``, ``falloff``, ``seed``, ``scene``); each gets the ones its function
+        takes (:func:`filter_options`). An option that no registered method takes is an
+        error. A method whose function returns an :class:`~vobscure.Estimate` gives its
+        value here and the whole estimate from :meth:`estimate`.
+
+        Examples
+        --------
+        >>> import vobscure as vo
+        >>> gb = vo.render_gbuffer(vo.scenes.slab(), vo.scenes.slab().camera((8, 8)))
+        >>> get("gtao").run(gb, 2, radius=0.5, normal_clamp=True).shape  # GTAO has no clamp
+        (8, 8)
+        >>> get("line").run(gb, radius=0.5, thicknes=0.1)
+        Traceback (most recent call last):
+        ...
+        ValueError: no registered method takes the option(s) 'thicknes'; method 'line' takes falloff, fetch, noise_size, normal_clamp, offscreen, radius, randomize, samples, seed, thickness
+        """
+        out = self._call(gbuffer, samples, fetch, options)
+        value = out.value if isinstance(out, Estimate) else out
+        shape = getattr(gbuffer, "shape", None)
+        if not isinstance(value, np.ndarray) or (shape is not None and value.shape != tuple(shape)):
+            raise ValueError(f"method {self.name!r} must return an (H, W) array of the G-buffer's shape "
+                             f"{shape}, got {type(value).__name__} {getattr(value, 'shape', '')}")
+        return value
+
+    def estimate(self, gbuffer, samples: int | None = None, *, fetch: str | None = None, **options) -> Estimate:
+        """As :meth:`run`, for a method whose function returns an :class:`~vobscure.Estimate`
+        (value and standard error, e.g. ``reference``); an error for the others."""
+        out = self._call(gbuffer, samples, fetch, options)
+        if not isinstance(out, Estimate):
+            raise ValueError(f"method {self.name!r} gives no standard error (its function returns "
+                             f"{type(out).__name__}); use run()")
+        return out
+
+
+def _anyone_takes(option: str) -> bool:
+    """Whether some registered method's function takes the keyword ``option``."""
+    return any(m._parameters is None or option in m._parameters for m in _REGISTRY.values())
 
 
 _REGISTRY: dict[str, Method] = {}
@@ -282,9 +335,14 @@ class Config:
     def reference(self, normal_clamp: bool = False) -> str:
         return self.spec.reference(normal_clamp)
 
-    def run(self, gbuffer, **kwargs):
-        """Run the estimator on ``gbuffer`` with this configuration's samples and fetch."""
-        return self.spec.run(gbuffer, self.samples, fetch=self.fetch, **kwargs)
+    def run(self, gbuffer, **options) -> np.ndarray:
+        """The (H, W) estimate on ``gbuffer`` with this configuration's samples and fetch
+        (:meth:`Method.run`)."""
+        return self.spec.run(gbuffer, self.samples, fetch=self.fetch, **options)
+
+    def estimate(self, gbuffer, **options) -> Estimate:
+        """The estimate with its standard error (:meth:`Method.estimate`)."""
+        return self.spec.estimate(gbuffer, self.samples, fetch=self.fetch, **options)
 
 
 def parse(spec) -> tuple[Config, ...]:
@@ -334,11 +392,10 @@ register(Method("point", vo_point, default_samples=12, fetch="bilinear", taps=po
                 summary="point sampling of the ball (Loos & Sloan 2010, Sec. 4)"))
 register(Method("line", vo_line, default_samples=9, fetch="nearest",
                 summary="line sampling: exact chords through the ball (Sec. 4.1)"))
-register(Method("area", vo_area, default_samples=1, fetch="bspline", fetch_parameter="reconstruction",
+register(Method("area", vo_area, default_samples=1, fetch="bspline",
                 summary="area sampling with mip-mapped depth moments (Sec. 4.2)"))
 register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_reference_taps,
                 summary="the converged screen-space VO (dense stratified points)", reference_only=True))
-
 
 
 # --------------------------------------------------------------------------- the engines' baselines
@@ -374,38 +431,20 @@ def _hbao_taps(n: int) -> int:
 GTAO_STEPS = 3
 HBAO_STEPS = 4
 
-
-#: The VO estimators' options that an AO estimator has no use for (AO has no half-ball,
-#: thickness model or VO falloff); the experiments pass them to every method.
-_VO_OPTIONS = ("normal_clamp", "thickness", "falloff")
-
-
-def _without_vo_options(fn, **fixed):
-    """``fn`` called without :data:`_VO_OPTIONS`, with ``fixed`` keywords added."""
-    def run(gbuffer, **kwargs):
-        for name in _VO_OPTIONS:
-            kwargs.pop(name, None)
-        return fn(gbuffer, **fixed, **kwargs)
-    run.__name__ = run.__qualname__ = fn.__name__
-    run.__doc__ = fn.__doc__
-    return run
-
-
-_gtao = _without_vo_options(gtao, steps=GTAO_STEPS)
-_hbao = _without_vo_options(hbao, steps=HBAO_STEPS)
-
-
-register(Method("gtao", _gtao, default_samples=3, fetch="bilinear", samples="slices", taps=_gtao_taps,
-                quantity=_cosine_ao, summary="GTAO (Jimenez et al. 2016): horizons per slice, cosine AO; "
-                                             "SAMPLES = slices of 3 steps a side"))
-register(Method("hbao", _hbao, default_samples=8, fetch="nearest", fetch_parameter=None, samples="directions",
-                taps=_hbao_taps, quantity=_uniform_ao,
+register(Method("gtao", partial(gtao, steps=GTAO_STEPS), default_samples=3, fetch="bilinear", samples="slices",
+                taps=_gtao_taps, quantity=_cosine_ao,
+                summary="GTAO (Jimenez et al. 2016): horizons per slice, cosine AO; SAMPLES = slices of 3 steps "
+                        "a side"))
+register(Method("hbao", partial(hbao, steps=HBAO_STEPS), default_samples=8, fetch="nearest", fetch_parameter=None,
+                samples="directions", taps=_hbao_taps, quantity=_uniform_ao,
                 summary="HBAO (Bavoil et al. 2008): horizon angles, uniform AO; SAMPLES = directions of 4 steps"))
-register(Method("alchemy", _without_vo_options(alchemy), default_samples=12, fetch="nearest", fetch_parameter=None,
+register(Method("alchemy", alchemy, default_samples=12, fetch="nearest", fetch_parameter=None,
                 quantity=_obscurance, summary="Alchemy AO (McGuire et al. 2011): obscurance estimator on a disk"))
-register(Method("sao", _without_vo_options(sao), default_samples=12, fetch="nearest", fetch_parameter=None,
+register(Method("sao", sao, default_samples=12, fetch="nearest", fetch_parameter=None,
                 quantity=_obscurance, summary="SAO (McGuire et al. 2012): spiral samples, falloff (r^2 - v.v)^3"))
 
+
+# --------------------------------------------------------------------------- object-space models
 def _no_taps(n: int) -> int:
     """An object-space model reads no depth buffer."""
     return 0
@@ -416,77 +455,37 @@ def _sky_visibility(normal_clamp: bool = False) -> str:
     return "sky visibility"
 
 
-def _hegeman_ellipsoid(gbuffer, **kwargs):
-    """Hegeman et al. 2006 with the canopy's minimum-volume enclosing ellipsoid (Sec. 3, Fig. 8)."""
-    return hegeman_gbuffer(gbuffer, shell="ellipsoid", **kwargs)
-
-
-register(Method("hegeman", hegeman_gbuffer, default_samples=1, fetch="none", fetch_parameter=None,
-                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
-                summary="Hegeman et al. 2006: canopy sphere (Eqs. 4-6) and ground occluder (Eqs. 7-8); "
-                        "vegetation scenes only"))
-def _hegeman_multishell(gbuffer, **kwargs):
-    """Hegeman et al. 2006 with three spheres by k-means, each point in the closest (Sec. 5)."""
-    return hegeman_gbuffer(gbuffer, shell="multishell", k=3, **kwargs)
-
-
-register(Method("hegeman_ellipsoid", _hegeman_ellipsoid, default_samples=1, fetch="none", fetch_parameter=None,
-                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
-                summary="Hegeman et al. 2006 with an ellipsoidal canopy shell (Sec. 3, Fig. 8); vegetation "
-                        "scenes only"))
-register(Method("hegeman_multishell", _hegeman_multishell, default_samples=1, fetch="none", fetch_parameter=None,
-                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
-                summary="Hegeman et al. 2006 with three k-means spheres (Sec. 5, Fig. 3); vegetation scenes only"))
-register(Method("reeves_blau", reeves_blau_gbuffer, default_samples=1, fetch="none", fetch_parameter=None,
-                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
-                summary="Reeves & Blau 1985: exp(-k depth in the canopy), k the leaves' extinction; the "
-                        "baseline of Hegeman et al.; vegetation scenes only"))
-
-
-def _poisson(gbuffer, **kwargs):
-    """The Poisson leaf cloud's expected sky visibility (issue 15), imported when called."""
-    from .trees.pixels import poisson_gbuffer
-
-    return poisson_gbuffer(gbuffer, **kwargs)
-
-
-register(Method("poisson", _poisson, default_samples=1, fetch="none", fetch_parameter=None,
-                taps=_no_taps, quantity=_sky_visibility, samples=None, needs_scene=True,
-                summary="Poisson leaf cloud in the canopy's bounding sphere: the expected visibility "
-                        "(1/pi) int exp(-sigma L) cos, sigma = n A / 2 from the leaf statistics, nothing "
-                        "fitted; leaves and ground; vegetation scenes only"))
-
-
 def _uniform_sky_visibility(normal_clamp: bool = False) -> str:
     """Bunnell's disks (Listing 14-1's term) estimate the uniformly weighted visibility of the
     whole sky: a solid-angle fraction per disk, no distance limit."""
     return "uniform sky visibility"
 
 
-def _bunnell(gbuffer, **kwargs):
-    """Bunnell 2005 disk AO per pixel (objectspace.bunnell_gbuffer), the meshes subdivided to
-    max_edge="auto" so that coarse walls (the Cornell box's) become surfaces of disks."""
-    from .objectspace import bunnell_gbuffer
-
-    kwargs.setdefault("max_edge", "auto")
-    return bunnell_gbuffer(gbuffer, **kwargs)
+def _object_space(name, function, quantity, summary):
+    """An object-space model: no samples, no depth fetch, the scene's description passed."""
+    return register(Method(name, function, default_samples=1, fetch="none", fetch_parameter=None, taps=_no_taps,
+                           quantity=quantity, samples=None, needs_scene=True, summary=summary))
 
 
-register(Method("bunnell", _bunnell, default_samples=1, fetch="none", fetch_parameter=None, taps=_no_taps,
-                quantity=_uniform_sky_visibility, samples=None, needs_scene=True,
-                summary="Bunnell 2005 (GPU Gems 2 ch. 14): a disk per vertex, Listing 14-1's shadow term, "
-                        "2 passes, tree of aggregated disks; object space, any mesh scene"))
-
-
-def _ren(gbuffer, **kwargs):
-    """Ren et al. 2006 per pixel (objectspace.sphere_set_gbuffer): the scene as 32 inscribed
-    spheres, order-4 SH, their log vectors summed and exponentiated once (hybrid exp)."""
-    from .objectspace import sphere_set_gbuffer
-
-    return sphere_set_gbuffer(gbuffer, **kwargs)
-
-
-register(Method("ren", _ren, default_samples=1, fetch="none", fetch_parameter=None, taps=_no_taps,
-                quantity=_sky_visibility, samples=None, needs_scene=True,
-                summary="Ren et al. 2006: the scene as k = 32 inscribed spheres, SH order 4, log vectors "
-                        "summed and exponentiated once (SHEXP, hybrid); cosine AO; any closed mesh scene"))
+_object_space("hegeman", hegeman_gbuffer, _sky_visibility,
+              "Hegeman et al. 2006: canopy sphere (Eqs. 4-6) and ground occluder (Eqs. 7-8); vegetation scenes only")
+# Sec. 3, Fig. 8: the canopy's minimum-volume enclosing ellipsoid
+_object_space("hegeman_ellipsoid", partial(hegeman_gbuffer, shell="ellipsoid"), _sky_visibility,
+              "Hegeman et al. 2006 with an ellipsoidal canopy shell (Sec. 3, Fig. 8); vegetation scenes only")
+# Sec. 5: three spheres by k-means, each point in the closest
+_object_space("hegeman_multishell", partial(hegeman_gbuffer, shell="multishell", k=3), _sky_visibility,
+              "Hegeman et al. 2006 with three k-means spheres (Sec. 5, Fig. 3); vegetation scenes only")
+_object_space("reeves_blau", reeves_blau_gbuffer, _sky_visibility,
+              "Reeves & Blau 1985: exp(-k depth in the canopy), k the leaves' extinction; the baseline of "
+              "Hegeman et al.; vegetation scenes only")
+_object_space("poisson", poisson_gbuffer, _sky_visibility,
+              "Poisson leaf cloud in the canopy's bounding sphere: the expected visibility (1/pi) int exp(-sigma L) "
+              "cos, sigma = n A / 2 from the leaf statistics, nothing fitted; leaves and ground; vegetation scenes "
+              "only")
+# the meshes subdivided to max_edge="auto", so that coarse walls (the Cornell box's) become surfaces of disks
+_object_space("bunnell", partial(bunnell_gbuffer, max_edge="auto"), _uniform_sky_visibility,
+              "Bunnell 2005 (GPU Gems 2 ch. 14): a disk per vertex, Listing 14-1's shadow term, 2 passes, tree of "
+              "aggregated disks; object space, any mesh scene")
+_object_space("ren", sphere_set_gbuffer, _sky_visibility,
+              "Ren et al. 2006: the scene as k = 32 inscribed spheres, SH order 4, log vectors summed and "
+              "exponentiated once (SHEXP, hybrid); cosine AO; any closed mesh scene")

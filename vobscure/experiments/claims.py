@@ -24,7 +24,7 @@ Three experiments, each measured against two references:
     ``vo_line`` with 9 samples clamped to the half-ball or not, each against its own ground
     truth, and how closely each follows ray-cast ambient occlusion.
 
-The measurements are one :func:`~vobscure.experiments.sweep.sweep` (:func:`sweep_configs`),
+The measurements are one :func:`~vobscure.experiments.sweep` (:func:`sweep_configs`),
 run in this process so that timings do not share the machine; costs (taps and texels per
 pixel) come from the method registry :mod:`vobscure.methods`.
 
@@ -217,7 +217,7 @@ def _corr(a, b) -> float:
 
 def sweep_configs(scene_name: str, *, size=(256, 256), radius=None, seed=0, rays=256, quick=False,
                   supplementary=True) -> list:
-    """The sweep behind :func:`line_vs_point`, as :class:`~vobscure.experiments.sweep.SweepConfig`
+    """The sweep behind :func:`line_vs_point`, as :class:`~vobscure.experiments.SweepConfig`
     objects: for each ``normal_clamp`` and configuration, the timed run against the three
     references (screen-space VO, world-space VO, AO), :data:`SEED_REPEATS` untimed runs at
     further seeds against the screen-space VO, and for each line fetch the converged
@@ -229,7 +229,7 @@ def sweep_configs(scene_name: str, *, size=(256, 256), radius=None, seed=0, rays
     >>> len(cs), cs[0].label, cs[0].references, cs[0].repeats
     (50, 'line:5', ('screen', 'volumetric', 'ao'), 3)
     """
-    from .sweep import SweepConfig
+    from .sweeps import SweepConfig
 
     base = dict(scene=scene_name, size=tuple(size), radius=radius, rays=rays,
                 volume_samples=TRUTH_SAMPLES[bool(quick)], screen_samples=REFERENCE_SAMPLES[bool(quick)],
@@ -253,7 +253,7 @@ def _measure(scene_name: str, size: tuple, radius, seed: int, rays: int, quick: 
     from ..metrics import error
     from ..scenes import resolve
     from ..screenspace import bilateral_blur
-    from .sweep import InlineExecutor, sweep
+    from .sweeps import InlineExecutor, sweep
 
     configs = sweep_configs(scene_name, size=size, radius=radius, seed=seed, rays=rays, quick=quick,
                             supplementary=supplementary)

@@ -1,7 +1,7 @@
 """What every experiment shares: the default radius, the machine record, the timer, and the
 CSV, Markdown, JSON and PNG writers (all atomic: a file is the old good one or the new one).
 
-:mod:`~vobscure.experiments.sweep`, :mod:`~vobscure.experiments.compare`,
+:mod:`~vobscure.experiments.sweeps`, :mod:`~vobscure.experiments.compare`,
 :mod:`~vobscure.experiments.claims` and the figure modules use these, so that a change of
 format or of timing method happens once.
 

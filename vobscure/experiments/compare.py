@@ -1,15 +1,15 @@
 """``vobscure compare``: which estimator, with how many samples, gives what accuracy at what
 cost on one scene -- answered in words and numbers.
 
-A comparison is a list of :class:`~vobscure.experiments.sweep.SweepConfig` (method x samples x
+A comparison is a list of :class:`~vobscure.experiments.SweepConfig` (method x samples x
 radius, from the method registry :mod:`vobscure.methods`) run by
-:func:`~vobscure.experiments.sweep.sweep` one after another in this process (timings do not
-share the machine): the G-buffer is rendered once, the references a request names are
-computed once per radius (and cached on disk, :mod:`vobscure.experiments.cache`), every
-configuration is timed (median of ``repeats`` after a warm-up) and its error measured against
-every reference, and split into the steps that cause it (:func:`vobscure.metrics.decompose`):
-sampling (estimate vs the converged screen-space VO), screen space (that vs the world-space
-VO) and model (world-space VO vs AO).
+:func:`~vobscure.experiments.sweep` one after another in this process (timings do not share
+the machine): the G-buffer is rendered once, the references a request names (from the registry
+:mod:`vobscure.references`) are computed once per radius (and cached on disk,
+:mod:`vobscure.experiments.cache`), every configuration is timed (median of ``repeats`` after
+a warm-up) and its error measured against every reference, and split into the steps that cause
+it (:func:`vobscure.metrics.decompose`): sampling (estimate vs the converged screen-space VO),
+screen space (that vs the world-space VO) and model (world-space VO vs AO).
 
 Each method is scored against the reference of *its own quantity* (registry: the VO
 estimators against the world-space VO of the ball or half-ball); numbers against a reference of
@@ -37,10 +37,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import methods as _methods
+from .. import references as _references
 from .._validate import check_choice, check_int, check_positive
 from .common import (default_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
                      write_text)
-from .sweep import REFERENCES, InlineExecutor, SweepConfig, sweep
+from .sweeps import REFERENCES, InlineExecutor, SweepConfig, sweep
 
 __all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front", "orbit_cameras", "parse_methods",
            "DEFAULT_METHODS", "DEFAULT_REFERENCES", "REFERENCES", "TARGET_FACTOR", "SUGGEST_THICKNESS"]
@@ -143,6 +144,11 @@ def _as_cache(cache):
     return ReferenceCache(cache)
 
 
+def _fits(reference: str, scene) -> bool:
+    """Whether the reference can be computed on the scene (an inside test needs a closed one)."""
+    return not _references.get(reference).closed_scene or scene.is_watertight
+
+
 def _row(result, metrics=METRICS) -> dict:
     """A compare row from a sweep result: configuration, cost, error against every reference,
     the method's own reference, and the decomposition."""
@@ -202,9 +208,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     thickness : float, optional
         The thickness model (Sec. 4.3) of every estimator and of the screen-space reference.
     references : sequence of str, optional
-        Some of :data:`~vobscure.experiments.sweep.REFERENCES`; only these are computed.
+        Some of the registry :data:`vobscure.references.REFERENCES`; only these are computed.
         Default ``("screen", "volumetric", "ao")``; on a scene that is not closed without
-        ``"volumetric"`` (the world-space VO needs an inside test), and on a vegetation scene
+        the references that need one (``"volumetric"``: the world-space VO needs an inside test), and on a vegetation scene
         with ``"sky"`` (what the vegetation models estimate). The error decomposition needs
         "screen" and "volumetric" (its model term also "ao").
     repeats : int
@@ -279,18 +285,18 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     if references is None and frame:
         references = ("screen",)
     elif references is None:
-        references = tuple(r for r in DEFAULT_REFERENCES if r != "volumetric" or sc.is_watertight)
+        references = tuple(r for r in DEFAULT_REFERENCES if _fits(r, sc))
         references += ("sky",) if vegetation else ()
         # and the reference of every requested method's own quantity (e.g. uniform AO for HBAO)
         for c in configs:
             own = c.reference(normal_clamp)
-            if own not in references and (own != "volumetric" or sc.is_watertight):
+            if own not in references and _fits(own, sc):
                 references += (own,)
     references = tuple(references)
     if not references:
-        raise ValueError("references must name at least one of " + ", ".join(REFERENCES))
+        raise ValueError("references must name at least one of " + ", ".join(_references.names()))
     for name in references:
-        check_choice(name, "references", REFERENCES)
+        check_choice(name, "references", _references.names())
     repeats = check_int(repeats, "repeats")
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
     if thickness is not None:
@@ -402,7 +408,7 @@ def _thickness_trials(rows, images, refs, gb, *, normal_clamp, seed, repeats) ->
         t = factor * radius
         timings, values = time_calls({"run": lambda: config.run(gb, radius=radius, normal_clamp=normal_clamp,
                                                                  thickness=t, seed=seed)}, max(1, repeats))
-        rep = error(getattr(values["run"], "value", values["run"]), truth)
+        rep = error(values["run"], truth)
         trials.append(dict(label=best["label"], radius=radius, factor=factor, thickness=t,
                            volumetric_rmse=rep.rmse, volumetric_bias=rep.bias, seconds=timings["run"].median,
                            baseline_rmse=best["volumetric_rmse"]))
@@ -457,7 +463,8 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
             and (q is None or _methods.QUANTITIES[q].screen_limit)
 
     keys |= {("screen", r["radius"], "screen_rmse") for r in shippable if screen_limited(r)}
-    for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", REFERENCES.index(k[0]))):
+    order = _references.names()
+    for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", order.index(k[0]))):
         sel = [r for r in shippable if r["radius"] == radius and np.isfinite(r.get(col, np.nan))
                and (r.get("own_reference") == ref if col == "own_rmse" else screen_limited(r))]
         if not sel:
@@ -650,7 +657,8 @@ def _tradeoff(path, rows, provenance):
 def _gallery(path, rows, refs, images, gb):
     radius = rows[0]["radius"]
     ref_imgs = refs[radius]
-    primary = next(n for n in ("volumetric", "screen", "ao", "obscurance", "sky", "sky_uniform") if n in ref_imgs)
+    # the world-space truth when there is one, else the first in the registry's order
+    primary = "volumetric" if "volumetric" in ref_imgs else next(n for n in _references.names() if n in ref_imgs)
     configs = [row["label"] for row in rows if row["radius"] == radius]
     ncol = max(len(ref_imgs), 4)
     per_row = max(ncol // 2, 1)

@@ -12,6 +12,7 @@ in ``docs/screenspace.md``, "How the paper is cited").
 
 from __future__ import annotations
 
+import warnings
 from functools import lru_cache, partial
 
 import numpy as np
@@ -299,9 +300,9 @@ def region_areas(pattern: SamplePattern) -> np.ndarray:
 # --- the estimator -------------------------------------------------------------------------
 
 def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, thickness=None,
-            falloff: str = "constant", model: str = "box", reconstruction: str = "bspline",
+            falloff: str = "constant", model: str = "box", fetch: str = "bspline",
             prefilter: bool = False, lod_bias=None, randomize: bool = True, seed=0,
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, reconstruction=None) -> np.ndarray:
     """Volumetric Obscurance by area sampling (Loos & Sloan 2010, Sec. 4.2).
 
     Each disk sample (x, y) of the pattern stands for its Voronoi region of the unit disk,
@@ -347,8 +348,9 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         uniform on [mu - sigma, mu + sigma], whose integrated visibility is linear on that
         interval (Sec. 4.2, Fig. 3). ``"gaussian"``: normal N(mu, sigma^2), visibility
         erfc((z - mu) / (sigma sqrt 2)) / 2, integrated in closed form (footnote 3).
-    reconstruction : {"bspline", "trilinear"}, optional
-        How the mip-map is read between texel centres and levels. ``"bspline"`` (default):
+    fetch : {"bspline", "trilinear"}, optional
+        How the mip-map is read between texel centres and levels (the depth fetch, as
+        ``fetch`` of :func:`vobscure.vo_point` and :func:`vobscure.vo_line`). ``"bspline"`` (default):
         3 x 3 texels per level weighted by a quadratic B-spline, whose spread does not
         depend on the sub-texel position (Notes). ``"trilinear"``: the paper's GPU hardware
         filtering, bilinear in two levels and linear between them.
@@ -358,7 +360,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         artifacts (Sec. 4.2). Default False.
     lod_bias : float, optional
         Levels subtracted from log2 of a region's footprint side when choosing the mip
-        level; larger is finer. Default None: ``LOD_BIAS[reconstruction]``, 1 for the
+        level; larger is finer. Default None: ``LOD_BIAS[fetch]``, 1 for the
         B-spline (its footprint then has the region's second moments), 0 for the trilinear
         tent (the paper's rule). Planes stay exact whatever the value; elsewhere the best
         value depends on the scene (``docs/screenspace.md``, "Level of detail").
@@ -377,6 +379,8 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         Edge of the tiled random texture in pixels (>= 1, default
         ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
         (i mod noise_size, j mod noise_size). Unused without ``randomize``.
+    reconstruction : {"bspline", "trilinear"}, optional
+        Deprecated name of ``fetch`` (a DeprecationWarning); given, it replaces ``fetch``.
 
     Returns
     -------
@@ -475,7 +479,11 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     radius = float(radius)
     pattern = C.as_pattern(samples, 2)
     check_choice(model, "model", MODELS)
-    check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
+    if reconstruction is not None:
+        warnings.warn("vo_area(reconstruction=...) is deprecated: use fetch=, the name of the depth fetch of "
+                      "every estimator", DeprecationWarning, stacklevel=2)
+        fetch = reconstruction
+    reconstruction = check_choice(fetch, "fetch", RECONSTRUCTIONS)
     lod_bias = LOD_BIAS[reconstruction] if lod_bias is None else float(as_array(lod_bias, "lod_bias", shape=()))
     thickness = C.check_common(offscreen=offscreen, falloff=falloff, thickness=thickness, noise_size=noise_size)
     dtype = C.out_dtype(gbuffer)

@@ -149,7 +149,8 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         Radius R of the ball around each pixel's point, in world units (> 0).
     samples : int or SamplePattern, optional
         The disk pattern: a count n >= 1 for the default point-symmetric pattern
-        ``vobscure.patterns.disk(n)`` (default 9), or a
+        ``vobscure.patterns.disk(n)`` (default 9: the larger line configuration of Loos &
+        Sloan 2010, Table 1), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 2) ``points`` in the unit disk and
         (n,) footnote-5 ``weights``. Depth-buffer taps per pixel: n.
     normal_clamp : bool, optional

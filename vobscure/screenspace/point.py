@@ -149,7 +149,8 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         Radius R of the ball around each pixel's point, in world units (> 0).
     samples : int or SamplePattern, optional
         The ball pattern: a count n >= 1 for the default point-symmetric pattern
-        ``vobscure.patterns.ball(n)`` (default 12), or a
+        ``vobscure.patterns.ball(n)`` (default 12: the smaller point configuration of Loos &
+        Sloan 2010, Table 1, and ``vobscure compare``'s default), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 3) ``points`` in the unit ball
         and (n,) volume ``weights``.
     normal_clamp : bool, optional

@@ -22,7 +22,7 @@ number of threads. Only the timing fields (:data:`TIMING_FIELDS`) differ between
 Examples
 --------
 >>> from concurrent.futures import ThreadPoolExecutor
->>> from vobscure.experiments.sweep import SweepConfig, sweep
+>>> from vobscure.experiments import SweepConfig, sweep
 >>> configs = [SweepConfig("slab", method, samples, size=(8, 8), radius=0.5, references=("screen",),
 ...                        screen_samples=64) for method, samples in (("line", 5), ("area", 1))]
 >>> with ThreadPoolExecutor(1) as pool:
@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import methods as _methods
+from .. import references as _references
 from .._validate import check_choice, check_int, check_positive
 from ..metrics import DECOMPOSITION_TERMS
 from .common import default_radius, progress_bar, write_text
@@ -52,14 +53,10 @@ from .common import default_radius, progress_bar, write_text
 __all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "results_to_csv",
            "results_to_markdown", "REFERENCES", "TIMING_FIELDS", "DEFAULT_SIZE", "DEFAULT_WORKERS"]
 
-#: References an estimate can be compared with: the converged screen-space VO
-#: (:func:`vobscure.vo_reference`, same settings as the estimate) and the ray-cast
-#: world-space VO, ambient occlusion within the radius and obscurance (linear falloff).
-REFERENCES = ("screen", "volumetric", "ao", "ao_uniform", "obscurance", "sky", "sky_uniform")
-#: The ray-cast sky visibility (ambient occlusion with no distance limit), cosine-weighted and
-#: uniform: the references of the vegetation models (Hegeman et al. 2006), whose paper does not
-#: say which of the two its "average probability over directions" means.
-SKY_REFERENCES = {"sky": "cosine", "sky_uniform": "uniform"}
+#: The names of the references an estimate can be compared with, in the order of the result
+#: columns: those of the registry :data:`vobscure.references.REFERENCES`, which says what each
+#: measures and how it is computed.
+REFERENCES = _references.names()
 #: Fields of :meth:`SweepResult.as_row` that are measured times and so differ between runs.
 TIMING_FIELDS = ("seconds", "seconds_runs", "cpu_seconds")
 #: Image size (width, height) when a configuration gives neither size nor camera.
@@ -123,11 +120,13 @@ class SweepConfig:
         Timed runs after the untimed first call; the median is reported. 0: not timed
         (``seconds`` is NaN), for configurations that only measure error.
     references : tuple of str
-        Some of :data:`REFERENCES` (a single name is accepted): ``"screen"``,
-        ``"volumetric"``, ``"ao"`` and ``"obscurance"`` (within the radius), ``"sky"`` and
-        ``"sky_uniform"`` (ambient occlusion with no distance limit, cosine-weighted or uniform).
+        Names of the reference registry :data:`vobscure.references.REFERENCES` (a single
+        name is accepted): ``"screen"``, ``"volumetric"``, ``"ao"`` and ``"obscurance"``
+        (within the radius), ``"sky"`` and ``"sky_uniform"`` (ambient occlusion with no
+        distance limit, cosine-weighted or uniform), ... Each entry says which sampling
+        parameter below it uses (:attr:`vobscure.references.Reference.samples`).
     rays : int
-        Rays per pixel of the ray-cast ``ao`` and ``obscurance`` references (directions).
+        Rays per pixel (directions) of the ray-cast references but ``volumetric``.
     volume_samples : int
         Points per ball of the world-space ``volumetric`` reference.
     screen_samples : int
@@ -175,7 +174,7 @@ class SweepConfig:
         if isinstance(self.scene, GBuffer):
             put(self, "camera", self.scene.camera)
             refs = (self.references,) if isinstance(self.references, str) else tuple(self.references)
-            if set(refs) - {"screen"}:
+            if any(r not in _references.REFERENCES or _references.get(r).needs_scene for r in refs):
                 raise ValueError(f"references {refs} need the scene's geometry; a G-buffer alone has only the "
                                  f"converged screen-space reference, references=('screen',)")
         config = _methods.Config(_methods.get(self.method).name, self.samples, fetch=self.fetch)
@@ -202,7 +201,7 @@ class SweepConfig:
         put(self, "repeats", check_int(self.repeats, "repeats", minimum=0))
         refs = (self.references,) if isinstance(self.references, str) else tuple(self.references)
         for r in refs:
-            check_choice(r, "references", REFERENCES)
+            check_choice(r, "references", _references.names())
         if len(set(refs)) != len(refs):
             raise ValueError(f"references must not repeat a name, got {refs}")
         put(self, "references", refs)
@@ -328,7 +327,7 @@ class SweepResult:
             "taps_per_pixel": self.taps_per_pixel, "texels_per_pixel": self.texels_per_pixel,
             "pixels": self.pixels, "quantity": c.quantity, "own_reference": c.own_reference,
         }
-        for ref in sorted(c.references, key=REFERENCES.index):
+        for ref in sorted(c.references, key=_references.names().index):
             report = self.errors[ref].as_dict()
             for stat in ERROR_STATS:
                 row[f"{stat}_{ref}"] = report[stat]
@@ -412,30 +411,20 @@ def view(config: SweepConfig):
 
 def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache):
     """(Estimate, cache hit) of the reference ``name`` of the configuration's view, made once
-    per worker."""
-    from .cache import ground_truth_cached, screen_reference_cached
+    per worker: the registry entry's arguments, computed through the disk cache."""
+    from . import cache as _cache
 
-    seed = config.reference_seed
-    if name == "screen":
-        params = dict(radius=radius, samples=config.screen_samples, normal_clamp=config.normal_clamp,
-                      thickness=config.thickness, falloff=config.falloff, seed=seed)
+    ref = _references.get(name)
+    params = ref.arguments(radius=radius, seed=config.reference_seed, rays=config.rays,
+                           volume_samples=config.volume_samples, screen_samples=config.screen_samples,
+                           normal_clamp=config.normal_clamp, thickness=config.thickness, falloff=config.falloff,
+                           allow_open=config.allow_open)
+    compute = getattr(_cache, ref.cached_by)
 
-        def make():
-            return screen_reference_cached(gb, scene, cache=cache, **params)
-    else:
-        params = dict(quantity=name, radius=radius, seed=seed)
-        if name == "volumetric":
-            params.update(samples=config.volume_samples, falloff=config.falloff,
-                          normal_clamp=config.normal_clamp, allow_open=config.allow_open)
-        elif name == "ao_uniform":
-            params.update(quantity="ao", weighting="uniform", rays=config.rays)
-        elif name in SKY_REFERENCES:
-            params.update(quantity="ao", radius=None, weighting=SKY_REFERENCES[name], rays=config.rays)
-        else:
-            params.update(rays=config.rays)
-
-        def make():
-            return ground_truth_cached(scene, gb, cache=cache, progress=False, **params)
+    def make():
+        if ref.needs_scene:
+            return compute(scene, gb, cache=cache, progress=False, **params)
+        return compute(gb, scene, cache=cache, **params)
 
     key = ("reference", config.view_key, _stamp(config.scene), name, json.dumps(params, sort_keys=True))
     return _MEMO.get(key, make)
@@ -457,7 +446,6 @@ def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
         kwargs["scene"] = scene
     timings, values = time_calls({"run": lambda: mc.run(gb, **kwargs)}, config.repeats)
     image = values["run"]
-    image = getattr(image, "value", image)      # a Monte Carlo method returns an Estimate
     runs = timings["run"].runs
     errors = {name: error(image, ref.value) for name, ref in refs.items()}
     decomposition = None
@@ -601,7 +589,7 @@ def _rows(results) -> tuple[list[dict], list[str]]:
     # even when the first rows lack them
     present = {k for row in rows for k in row}
     canonical = list(_COLUMNS_HEAD)
-    canonical += [f"{stat}_{ref}" for ref in REFERENCES for stat in ERROR_STATS]
+    canonical += [f"{stat}_{ref}" for ref in _references.names() for stat in ERROR_STATS]
     canonical += [f"{term}_{stat}" for term in DECOMPOSITION_TERMS for stat in ("rmse", "bias", "mae")]
     canonical += ["decomposition_target", *_COLUMNS_TAIL]
     columns = [k for k in canonical if k in present]
@@ -651,15 +639,3 @@ def results_to_markdown(results, path=None) -> str:
     if path is not None:
         write_text(path, text)
     return text
-
-
-class _CallableModule(__import__("types").ModuleType):
-    """Lets ``vobscure.experiments.sweep(configs, executor=...)`` call :func:`sweep` while
-    ``vobscure.experiments.sweep.SweepConfig`` etc. stay reachable (the module and its main
-    function share a name)."""
-
-    def __call__(self, configs, **kwargs):
-        return sweep(configs, **kwargs)
-
-
-__import__("sys").modules[__name__].__class__ = _CallableModule
