@@ -1,8 +1,9 @@
-"""Shared fixtures and statistical helpers for the vobscure test suite."""
+"""Shared fixtures and helpers for the vobscure test suite (closed forms: tests/analytic.py)."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pytest
@@ -46,3 +47,50 @@ def slab():
     import vobscure as vo
 
     return vo.scenes.slab()
+
+
+@pytest.fixture(scope="module")
+def big_slab():
+    """A slab far larger than any view of it: no image shows its edge."""
+    import vobscure as vo
+
+    return vo.scenes.slab(size=200.0)
+
+
+def interior(gb, radius, margin=1.0):
+    """Pixels whose whole tap disk of ``radius`` (plus ``margin`` pixels) lies on the image:
+    an estimator's off-screen taps legitimately read other values."""
+    H, W = gb.shape
+    rp = radius * np.asarray(gb.camera.pixels_per_unit(np.where(gb.valid, gb.depth, 1.0)))
+    i, j = np.mgrid[0:H, 0:W]
+    return (gb.valid & (j + 0.5 - rp - margin > 0) & (j + 0.5 + rp + margin < W)
+            & (i + 0.5 - rp - margin > 0) & (i + 0.5 + rp + margin < H))
+
+
+#: The orthographic view of the crease shared by the screen-space tests: its depth buffer
+#: describes the solids exactly, so an estimator converges to the closed forms.
+CREASE_EYE, CREASE_TARGET = (3.0, 3.0, 1.0), (0.4, 0.2, 0.0)
+CREASE_SIZE = 128
+#: The radius R of ``crease_view``'s floor pixels (c = x / R).
+CREASE_RADIUS = 1.0
+
+
+class CreaseView(NamedTuple):
+    """The crease's G-buffer, the floor pixels with 0.05 < c < 0.95 whose tap disk of radius
+    CREASE_RADIUS lies on the image, and their c = x / R."""
+
+    gb: object
+    floor: np.ndarray
+    c: np.ndarray
+
+
+@pytest.fixture(scope="module")
+def crease_view(crease):
+    import vobscure as vo
+
+    cam = vo.Camera.look_at(CREASE_EYE, CREASE_TARGET, size=(CREASE_SIZE, CREASE_SIZE), ortho_height=4.0)
+    gb = vo.render_gbuffer(crease, cam)
+    x, y = gb.world_position[..., 0], gb.world_position[..., 1]
+    R = CREASE_RADIUS
+    floor = interior(gb, R) & (np.abs(y) < 1e-9) & (x > 0.05 * R) & (x < 0.95 * R)
+    return CreaseView(gb, floor, x[floor] / R)

@@ -5,7 +5,9 @@ from __future__ import annotations
 import json
 import os
 import pickle
+import sys
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -333,10 +335,16 @@ def test_disabled_cache_always_computes_and_writes_nothing(tmp_path, view):
 def test_default_directory(monkeypatch, tmp_path):
     monkeypatch.setenv("VOBSCURE_CACHE", str(tmp_path / "env"))
     assert ReferenceCache().directory == tmp_path / "env"
-    monkeypatch.delenv("VOBSCURE_CACHE")
+    monkeypatch.setenv("VOBSCURE_CACHE", "~/env")
+    assert C.default_directory() == Path("~/env").expanduser()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the XDG base directories are Linux's")
+def test_default_directory_follows_xdg_on_linux(monkeypatch, tmp_path):
+    monkeypatch.delenv("VOBSCURE_CACHE", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert C.default_directory() == tmp_path / "xdg" / "vobscure"
-    monkeypatch.setenv("XDG_CACHE_HOME", "relative/path")       # ignored, as XDG says
+    monkeypatch.delenv("XDG_CACHE_HOME")
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
     assert C.default_directory() == tmp_path / "home" / ".cache" / "vobscure"
 

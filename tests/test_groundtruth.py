@@ -9,6 +9,7 @@ from scipy import integrate
 import vobscure as vo
 from vobscure.groundtruth import DEFAULT_GROUPS
 
+from analytic import crease_cosine_ao, crease_points, crease_uniform_ao, crease_vo, crease_vo_clamped
 from conftest import assert_unbiased, t_threshold
 
 R = 1.0
@@ -17,35 +18,12 @@ GROUPS = 32  # more randomizations than the default: tighter t thresholds in the
 DF = GROUPS - 1
 
 
-def crease_points(c):
-    a = np.atleast_1d(c) * R
-    points = np.stack([a, np.zeros_like(a), np.zeros_like(a)], axis=1)
-    normals = np.tile([0.0, 1.0, 0.0], (len(a), 1))
-    return points, normals
-
-
-def cosine_ao_exact(c):
-    return 1.0 - (np.arccos(c) - c * np.sqrt(1.0 - c * c)) / np.pi
-
-
-def uniform_ao_exact(c):
-    return (1.0 + c) / 2.0
-
-
-def ball_vo_exact(c):
-    return 0.5 - (1.0 - c) ** 2 * (2.0 + c) / 8.0
-
-
-def half_ball_vo_exact(c):
-    return 1.0 - (1.0 - c) ** 2 * (2.0 + c) / 4.0
-
-
 def test_crease_cosine_ao(crease):
-    p, n = crease_points(C_VALUES)
+    p, n = crease_points(C_VALUES, R)
     e = vo.ambient_occlusion(crease, p, n, rays=2048, max_distance=R, seed=1, groups=GROUPS)
     assert e.value.shape == (len(C_VALUES),) and e.samples == 2048
     assert np.all(e.stderr > 0)
-    assert_unbiased(e, cosine_ao_exact(C_VALUES), df=DF)
+    assert_unbiased(e, crease_cosine_ao(C_VALUES), df=DF)
 
 
 def test_point_on_the_crease_edge(crease):
@@ -55,48 +33,48 @@ def test_point_on_the_crease_edge(crease):
     that leave the wall are not stopped by it at t = 0 and rays into the wall start inside
     it and meet its far side (docs/groundtruth.md, "Rays leaving surfaces").
     """
-    p, n = crease_points([0.0])
+    p, n = crease_points([0.0], R)
     e = vo.ambient_occlusion(crease, p, n, rays=2048, seed=12, groups=GROUPS)
-    assert_unbiased(e, cosine_ao_exact(np.array([0.0])), df=DF)
+    assert_unbiased(e, crease_cosine_ao(np.array([0.0])), df=DF)
     e = vo.ambient_occlusion(crease, p, n, rays=2048, weighting="uniform", seed=12, groups=GROUPS)
-    assert_unbiased(e, uniform_ao_exact(np.array([0.0])), df=DF)
+    assert_unbiased(e, crease_uniform_ao(np.array([0.0])), df=DF)
 
 
 def test_stderr_never_zero_inside_the_range(crease):
     """Next to the edge every group of stratified directions sees exactly half the wall,
     the group means agree and their spread is 0; the reported stderr must not be 0 there."""
-    p, n = crease_points([0.003, 0.01])
+    p, n = crease_points([0.003, 0.01], R)
     e = vo.ambient_occlusion(crease, p, n, rays=256, max_distance=R, seed=0)
     assert np.all(e.stderr > 0)
-    assert_unbiased(e, cosine_ao_exact(np.array([0.003, 0.01])), df=DEFAULT_GROUPS - 1)
+    assert_unbiased(e, crease_cosine_ao(np.array([0.003, 0.01])), df=DEFAULT_GROUPS - 1)
     v = vo.volumetric_obscurance(crease, p, radius=R, samples=512, seed=0)
     assert np.all(v.stderr > 0)
-    assert_unbiased(v, ball_vo_exact(np.array([0.003, 0.01])), df=DEFAULT_GROUPS - 1)
+    assert_unbiased(v, crease_vo(np.array([0.003, 0.01])), df=DEFAULT_GROUPS - 1)
 
 
 def test_crease_uniform_ao(crease):
-    p, n = crease_points(C_VALUES)
+    p, n = crease_points(C_VALUES, R)
     e = vo.ambient_occlusion(crease, p, n, rays=2048, max_distance=R, weighting="uniform", seed=2,
                              groups=GROUPS)
-    assert_unbiased(e, uniform_ao_exact(C_VALUES), df=DF)
+    assert_unbiased(e, crease_uniform_ao(C_VALUES), df=DF)
 
 
 def test_crease_ball_vo(crease):
-    p, _ = crease_points(C_VALUES)
+    p, _ = crease_points(C_VALUES, R)
     e = vo.volumetric_obscurance(crease, p, radius=R, samples=2048, seed=3, groups=GROUPS)
-    assert_unbiased(e, ball_vo_exact(C_VALUES), df=DF)
+    assert_unbiased(e, crease_vo(C_VALUES), df=DF)
 
 
 def test_crease_half_ball_vo(crease):
-    p, n = crease_points(C_VALUES)
+    p, n = crease_points(C_VALUES, R)
     e = vo.volumetric_obscurance(crease, p, n, radius=R, normal_clamp=True, samples=2048, seed=4, groups=GROUPS)
-    assert_unbiased(e, half_ball_vo_exact(C_VALUES), df=DF)
+    assert_unbiased(e, crease_vo_clamped(C_VALUES), df=DF)
 
 
 def test_crease_quadratic_vo_against_quadrature(crease):
     """Falloff 1 - r^2 on the half ball: exact value by quadrature over the wall's cap."""
     c = np.array([0.2, 0.6])
-    p, n = crease_points(c)
+    p, n = crease_points(c, R)
     e = vo.volumetric_obscurance(crease, p, n, radius=R, normal_clamp=True, samples=2048, falloff="quadratic",
                                  seed=5, groups=GROUPS)
     exact = []
@@ -121,7 +99,7 @@ def test_obscurance_linear_against_quadrature(crease):
     disk coordinate x < -c meets the wall at d = a / |x| < R, where rho = c / |x|.
     """
     c = np.array([0.1, 0.4, 0.8])
-    p, n = crease_points(c)
+    p, n = crease_points(c, R)
     e = vo.obscurance(crease, p, n, radius=R, falloff="linear", rays=2048, seed=6, groups=GROUPS)
     exact = []
     for ci in c:
@@ -131,7 +109,7 @@ def test_obscurance_linear_against_quadrature(crease):
 
 
 def test_obscurance_step_equals_ao_within_radius(crease):
-    p, n = crease_points(C_VALUES)
+    p, n = crease_points(C_VALUES, R)
     ob = vo.obscurance(crease, p, n, radius=R, falloff="step", rays=512, seed=7)
     ao = vo.ambient_occlusion(crease, p, n, rays=512, max_distance=R, seed=7)
     # same seed, same directions: the two estimators count exactly the same rays
@@ -139,7 +117,7 @@ def test_obscurance_step_equals_ao_within_radius(crease):
 
 
 def test_obscurance_callable_and_smooth(crease):
-    p, n = crease_points([0.3])
+    p, n = crease_points([0.3], R)
     lin = vo.obscurance(crease, p, n, radius=R, falloff="linear", rays=512, seed=8)
     same = vo.obscurance(crease, p, n, radius=R, falloff=lambda t: t, rays=512, seed=8)
     np.testing.assert_array_equal(lin.value, same.value)
@@ -164,7 +142,7 @@ def test_slab_exact_values(slab):
 
 def test_stderr_is_honest(crease):
     """The reported stderr matches the spread of estimates over independent seeds."""
-    p, n = crease_points([0.4])
+    p, n = crease_points([0.4], R)
     seeds = 40
     vals = np.array([vo.ambient_occlusion(crease, p, n, rays=64, max_distance=R, seed=s).value[0]
                      for s in range(seeds)])
@@ -180,7 +158,7 @@ def test_stderr_is_honest(crease):
 
 
 def test_bent_normals_point_away_from_wall(crease, slab):
-    p, n = crease_points([0.05, 0.5])
+    p, n = crease_points([0.05, 0.5], R)
     e = vo.ambient_occlusion(crease, p, n, rays=1024, max_distance=R, seed=0, bent_normals=True)
     assert e.bent_normal.shape == (2, 3)
     np.testing.assert_allclose(np.linalg.norm(e.bent_normal, axis=1), 1.0, rtol=1e-12)
@@ -195,7 +173,7 @@ def test_bent_normals_point_away_from_wall(crease, slab):
 
 def test_scale_invariance(crease):
     c = np.array([0.2, 0.7])
-    p, n = crease_points(c)
+    p, n = crease_points(c, R)
     base = vo.ambient_occlusion(crease, p, n, rays=256, max_distance=R, seed=11)
     vbase = vo.volumetric_obscurance(crease, p, radius=R, samples=256, seed=11)
     for k in (1e-3, 1e3):
@@ -208,7 +186,7 @@ def test_scale_invariance(crease):
 
 
 def test_determinism_and_threads(crease):
-    p, n = crease_points(C_VALUES)
+    p, n = crease_points(C_VALUES, R)
     a = vo.ambient_occlusion(crease, p, n, rays=128, seed=5, threads=1)
     b = vo.ambient_occlusion(crease, p, n, rays=128, seed=5, threads=2)
     c = vo.ambient_occlusion(crease, p, n, rays=128, seed=6, threads=2)
@@ -242,10 +220,10 @@ def test_ground_truth_per_pixel(crease):
     assert floor.sum() > 20
     c = np.minimum(gb.world_position[floor][:, 0] / R, 1.0)
     sub = vo.Estimate(ref.value[floor], ref.stderr[floor], ref.samples)
-    assert_unbiased(sub, cosine_ao_exact(c), df=DEFAULT_GROUPS - 1)
+    assert_unbiased(sub, crease_cosine_ao(c), df=DEFAULT_GROUPS - 1)
     vol = vo.ground_truth(crease, gb, quantity="volumetric", radius=R, samples=256, seed=0, progress=False)
     sub = vo.Estimate(vol.value[floor], vol.stderr[floor], vol.samples)
-    assert_unbiased(sub, ball_vo_exact(c), df=DEFAULT_GROUPS - 1)
+    assert_unbiased(sub, crease_vo(c), df=DEFAULT_GROUPS - 1)
     obs = vo.ground_truth(crease, gb, quantity="obscurance", radius=R, rays=64, progress=False)
     assert np.all((obs.value[gb.valid] >= 0) & (obs.value[gb.valid] <= 1))
 
@@ -271,7 +249,7 @@ def test_open_mesh_needs_opt_in():
     (dict(seed="abc"), "seed"),
 ])
 def test_ao_bad_arguments(crease, kwargs, match):
-    p, n = crease_points([0.5])
+    p, n = crease_points([0.5], R)
     with pytest.raises(ValueError, match=match):
         vo.ambient_occlusion(crease, p, n, **kwargs)
 
@@ -418,7 +396,7 @@ def test_interreflections_in_a_spherical_cavity(cavity, bounces):
 def test_interreflections_only_add_light(crease, slab):
     # The primary rays are the same draws with and without bounces (same seed), and a path
     # that escapes at once brings 1 either way: light reflected by the occluders only adds.
-    p, n = crease_points([0.02, 0.1, 0.3])
+    p, n = crease_points([0.02, 0.1, 0.3], R)
     plain = vo.ambient_occlusion(crease, p, n, rays=256, seed=4)
     assert vo.ambient_occlusion(crease, p, n, rays=256, seed=4, bounces=0, albedo=0.7).value.tolist() == \
         plain.value.tolist()
@@ -441,7 +419,7 @@ def test_interreflections_only_add_light(crease, slab):
     (dict(bounces=1, albedo=0.5, bent_normals=True), "bent_normals"),
 ])
 def test_interreflection_bad_arguments(crease, kwargs, match):
-    p, n = crease_points([0.5])
+    p, n = crease_points([0.5], R)
     with pytest.raises(ValueError, match=match):
         vo.ambient_occlusion(crease, p, n, **kwargs)
 

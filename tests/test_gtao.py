@@ -11,6 +11,9 @@ import vobscure as vo
 from vobscure.gbuffer import GBuffer
 from vobscure.screenspace.gtao import PRESETS, gtao, gtao_bent_normals
 
+from analytic import crease_bent_normal, crease_cosine_ao
+from conftest import interior
+
 #: Planes at 9 slices (not grazing): the slice integral |n_p| (cos g + g sin g) is exact only
 #: on average over slices; the midpoint rule over 9 slices leaves at most 1.4e-6 (measured,
 #: perspective oblique), 3e-9 (orthographic oblique).
@@ -30,7 +33,7 @@ PERSPECTIVE_TOL = 2.5e-2
 #: Bent normals on a plane, degrees from the normal (interior pixels), 2 slices or more:
 #: measured max 1.2e-6 degrees (3 and 9 slices).
 BENT_PLANE_TOL_DEG = 1e-2
-#: Bent normals on the orthographic crease against the closed form of tests/test_shading.py
+#: Bent normals on the orthographic crease against the closed form (tests/analytic.py)
 #: (the wall blocks omega_x < -c), 16 x 16 without randomization: measured RMS angle 0.88
 #: degrees (3 x 3: 4.5, 32 x 32: 0.61).
 BENT_CREASE_TOL_DEG = 1.2
@@ -38,25 +41,6 @@ BENT_CREASE_TOL_DEG = 1.2
 #: in float64 after that). Measured max 9e-7 (orthographic crease), 4e-7 (perspective);
 #: acos near 1 amplifies a rounding of the horizon cosine, hence 10x the measured.
 FLOAT32_TOL = 1e-5
-
-
-def interior(gb, radius, margin=1.0):
-    """Pixels whose whole tap disk lies on the image."""
-    H, W = gb.shape
-    rp = radius * np.asarray(gb.camera.pixels_per_unit(np.where(gb.valid, gb.depth, 1.0)))
-    i, j = np.mgrid[0:H, 0:W]
-    return (gb.valid & (j + 0.5 - rp - margin > 0) & (j + 0.5 + rp + margin < W)
-            & (i + 0.5 - rp - margin > 0) & (i + 0.5 + rp + margin < H))
-
-
-def cosine_ao_crease(c):
-    """DESIGN.md: cosine-weighted AO within R at distance a = c R from the wall."""
-    return 1 - (np.arccos(c) - c * np.sqrt(1 - c * c)) / np.pi
-
-
-@pytest.fixture(scope="module")
-def big_slab():
-    return vo.scenes.slab(size=200.0)
 
 
 VIEWS = {
@@ -95,20 +79,10 @@ def test_plane_facing_the_camera_is_exact_with_one_slice():
         assert np.max(np.abs(v[inside] - 1.0)) < PLANE_TOL
 
 
-@pytest.fixture(scope="module")
-def crease_view():
-    scene = vo.scenes.crease()
-    cam = vo.Camera.look_at((3, 3, 1.0), (0.4, 0.2, 0), size=(128, 128), ortho_height=4.0)
-    gb = vo.render_gbuffer(scene, cam)
-    x, y = gb.world_position[..., 0], gb.world_position[..., 1]
-    floor = interior(gb, 1.0) & (np.abs(y) < 1e-9) & (x > 0.05) & (x < 0.95)
-    return gb, floor, x[floor]
-
-
 def test_converges_to_closed_form_on_orthographic_crease(crease_view):
     gb, floor, c = crease_view
     assert floor.sum() > 500
-    exact = cosine_ao_crease(c)
+    exact = crease_cosine_ao(c)
     rmse = [np.sqrt(np.mean((gtao(gb, radius=1.0, slices=n, steps=n, randomize=False)[floor] - exact) ** 2))
             for n in (4, 16, 32)]
     assert rmse[2] < rmse[1] < rmse[0], rmse
@@ -133,7 +107,7 @@ def test_against_ray_cast_ao_in_perspective():
 def test_options_move_away_from_the_reference(crease_view):
     """power and falloff_range bias the estimate (docs/screenspace.md, "GTAO")."""
     gb, floor, c = crease_view
-    exact = cosine_ao_crease(c)
+    exact = crease_cosine_ao(c)
     base = gtao(gb, radius=1.0, slices=8, steps=8, randomize=False)
     dark = gtao(gb, radius=1.0, slices=8, steps=8, randomize=False, power=2.2)
     np.testing.assert_allclose(dark[floor], base[floor] ** 2.2, rtol=1e-12)
@@ -258,8 +232,7 @@ def test_bent_normals_on_planes_are_the_normal(big_slab, view):
 
 def test_bent_normals_converge_on_the_crease(crease_view):
     gb, floor, c = crease_view
-    # tests/test_shading.py: the integral of omega cos theta over the open directions
-    exact = np.stack([2 / 3 * (1 - c * c) ** 1.5, np.pi / 3 + np.pi * c / 2 - np.pi * c ** 3 / 6, 0 * c], axis=-1)
+    exact = crease_bent_normal(c)
     exact /= np.linalg.norm(exact, axis=-1, keepdims=True)
     rms = []
     for n in (3, 16):

@@ -9,10 +9,13 @@ gets the original G-buffer's ``vo_line`` estimate.
 from __future__ import annotations
 
 import re
+import struct
+import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 import vobscure as vo
 from vobscure import io as vio
@@ -28,6 +31,15 @@ DISTANCE_TOL = 5e-6
 #: Blender's depth on background pixels.
 BLENDER_BACKGROUND = 1e10
 SIZE = (48, 32)
+#: PNG colour types (PNG specification, section 11.2.2, IHDR).
+GREY, RGB = 0, 2
+
+
+def _png_header(path) -> tuple[int, int]:
+    """(bit depth, colour type) from a PNG's IHDR chunk, read from the bytes."""
+    data = Path(path).read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR", f"{path} is not a PNG"
+    return data[24], data[25]
 
 needs_from_arrays = pytest.mark.skipif(not hasattr(vo.GBuffer, "from_arrays"),
                                        reason="GBuffer.from_arrays (issue 12, part 1) has not landed")
@@ -211,10 +223,9 @@ def test_pfm_reader_follows_the_format(tmp_path):
 
 
 def test_png16_depth_round_trip(tmp_path):
-    import imageio.v3 as iio
-
     raw = np.array([[0, 1000, 65535], [2500, 1, 40000]], dtype=np.uint16)
-    iio.imwrite(tmp_path / "d.png", raw)
+    Image.fromarray(raw).save(tmp_path / "d.png")
+    assert _png_header(tmp_path / "d.png") == (16, GREY)
     depth, normal, _ = vio.read_buffers(tmp_path / "d.png", depth_scale=0.001)
     np.testing.assert_allclose(depth, np.where(raw == 0, np.inf, raw * 0.001))
     with pytest.raises(ValueError, match="give depth_scale"):
@@ -306,17 +317,19 @@ def test_write_image_exr_keeps_nan(tmp_path):
 
 @pytest.mark.parametrize("bits", [8, 16])
 def test_write_image_png_background_colour(tmp_path, bits):
-    import imageio.v3 as iio
-
     top = (1 << bits) - 1
     v = np.array([[0.0, 0.5], [np.nan, 1.0]])
     vio.write_image(tmp_path / "g.png", v, bits=bits, background=0.25)
-    grey = iio.imread(tmp_path / "g.png")
+    assert _png_header(tmp_path / "g.png") == (bits, GREY)
+    grey = np.asarray(Image.open(tmp_path / "g.png"))
     assert grey.tolist() == [[0, round(0.5 * top)], [round(0.25 * top), top]]
     vio.write_image(tmp_path / "c.png", v, bits=8, background=(1.0, 0.0, 0.0))
-    rgb = iio.imread(tmp_path / "c.png")
+    assert _png_header(tmp_path / "c.png") == (8, RGB)
+    rgb = np.asarray(Image.open(tmp_path / "c.png"))
     assert rgb.shape == (2, 2, 3)
     assert rgb[1, 0].tolist() == [255, 0, 0] and rgb[0, 1].tolist() == [128, 128, 128]
+    with pytest.raises(ValueError, match="16-bit PNG is grey"):
+        vio.write_image(tmp_path / "c16.png", v, bits=16, background=(1.0, 0.0, 0.0))
 
 
 def test_write_image_refuses_bad_input(tmp_path):
@@ -380,11 +393,24 @@ def test_multipart_half_float_exr(tmp_path):
 
 
 def test_png_normal_map_is_read_as_unit_encoding(tmp_path):
-    import imageio.v3 as iio
-
     np.save(tmp_path / "d.npy", np.ones((2, 2)))
     rgb = np.zeros((2, 2, 3), np.uint8)
     rgb[..., 2] = 255
-    iio.imwrite(tmp_path / "n.png", rgb)
+    Image.fromarray(rgb).save(tmp_path / "n.png")
     _, normal, found = vio.read_buffers((tmp_path / "d.npy", tmp_path / "n.png"))
     assert found["normal_encoding"] == "unit" and normal[0, 0].tolist() == [0, 0, 1]
+
+
+def test_png_16_bit_normal_map_is_read_at_8_bits(tmp_path):
+    """A 16-bit RGB PNG, encoded here by hand (zlib, filter 0), reads as its samples' high bytes."""
+    np.save(tmp_path / "d.npy", np.ones((1, 2)))
+    samples = np.array([[[0x0000, 0x8000, 0xFFFF], [0x12FF, 0xAB00, 0x7FFF]]], dtype=">u2")
+    rows = b"\0" + samples.tobytes()   # one row, filter type 0
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    (tmp_path / "n.png").write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 1, 16, RGB, 0, 0, 0))
+                                     + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+    _, normal, _ = vio.read_buffers((tmp_path / "d.npy", tmp_path / "n.png"))
+    np.testing.assert_array_equal(normal[0] * 255, [[0x00, 0x80, 0xFF], [0x12, 0xAB, 0x7F]])

@@ -614,3 +614,20 @@ def test_public_names_and_no_private_imports_between_modules():
             if isinstance(node, ast.ImportFrom) and node.level > 0 and "patterns" in (node.module or "") + str(path):
                 private = [a.name for a in node.names if a.name.startswith("_")]
                 assert not private, f"{path.relative_to(root)} imports {private} from {node.module}"
+
+
+def test_patterns_are_symmetric_with_footnote5_weights():
+    for n in (1, 2, 5, 9, 16):
+        p = P.disk(n)
+        assert p.is_symmetric and p.points.shape == (n, 2)
+        assert np.isclose(p.weights.sum(), 1.0)
+        assert np.all(np.sum(p.points ** 2, axis=1) <= 1 + 1e-12)
+    # one centre sample stands for the whole disk
+    assert np.array_equal(P.disk(1).points, [[0.0, 0.0]])
+    # footnote 5: a region near the rim has a smaller z-extent than one near the centre
+    p = P.disk(5)
+    centre = np.argmin(np.sum(p.points ** 2, axis=1))
+    assert p.weights[centre] > np.max(np.delete(p.weights, centre)) * 0.9
+    q = P.ball(12)
+    assert q.is_symmetric and q.points.shape == (12, 3)
+

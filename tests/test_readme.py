@@ -14,15 +14,12 @@ def test_readme_example_runs(capsys):
     namespace: dict = {}
     exec(compile(blocks[0], str(README), "exec"), namespace)
     e = namespace["e"]
-    c = 0.5
-    import numpy as np
-
-    exact = 1 - (np.arccos(c) - c * np.sqrt(1 - c * c)) / np.pi
     # the example's claim: the estimate sits on the closed form within its standard error
+    from analytic import crease_cosine_ao
     from conftest import t_threshold
     from vobscure.groundtruth import DEFAULT_GROUPS
 
-    assert abs(e.value[0] - exact) < t_threshold(DEFAULT_GROUPS - 1) * e.stderr[0]
+    assert abs(e.value[0] - crease_cosine_ao(0.5)) < t_threshold(DEFAULT_GROUPS - 1) * e.stderr[0]
     assert "(96, 128)" in capsys.readouterr().out
 
 

@@ -11,6 +11,7 @@ import vobscure as vo
 from vobscure.shading import (JIMENEZ_2016, LinearSky, ambient, bent_cosine, bent_normal_lookup,
                               iones_indirect, multibounce_jimenez, stewart_langer)
 
+from analytic import crease_bent_normal, crease_cosine_ao
 from conftest import t_threshold
 
 EXACT = 1e-12          # closed forms evaluated two ways in float64
@@ -25,20 +26,6 @@ DIFF_ROUNDING = 1e-4
 
 
 # ----------------------------------------------------------------------------- helpers
-def crease_bent_normal(c):
-    """The unnormalized bent normal b, the integral of omega cos theta over the open
-    directions, on the crease's floor at x = a = c R: the wall at x = 0 blocks
-    omega_x < -c (docs/shading.md)."""
-    c = np.asarray(c, dtype=float)
-    b_x = 2.0 / 3.0 * (1.0 - c * c) ** 1.5
-    b_y = np.pi / 3.0 + np.pi * c / 2.0 - np.pi * c ** 3 / 6.0
-    return np.stack([b_x, b_y, np.zeros_like(c)], axis=-1)
-
-
-def crease_ao(c):
-    return 1.0 - (np.arccos(c) - c * np.sqrt(1.0 - c * c)) / np.pi
-
-
 def sphere_quadrature(f, n=QUAD_N):
     """Integral of f(omega) over the upper (y > 0) hemisphere: midpoint rule in (theta, phi)
     about the y axis, d omega = sin theta d theta d phi. f: (m, 3) -> (m, k)."""
@@ -189,7 +176,7 @@ def test_crease_bent_normal_closed_form_by_quadrature():
         q = sphere_quadrature(lambda w: np.concatenate([w * w[:, 1:2], w[:, 1:2] / np.pi], axis=1)
                               * (w[:, :1] >= -c))
         np.testing.assert_allclose(crease_bent_normal(c), q[:3], atol=20 * QUADRATURE)
-        assert q[3] == pytest.approx(crease_ao(c), abs=20 * QUADRATURE)
+        assert q[3] == pytest.approx(crease_cosine_ao(c), abs=20 * QUADRATURE)
 
 
 def test_crease_bent_normal_against_ground_truth(crease):
@@ -214,7 +201,7 @@ def test_bent_normal_lookup_on_the_crease():
     """Against the exact shading c_amb / pi * integral of v L cos = c_amb / pi (pi L_0 k_A + L_1 u.b)
     (docs/shading.md): for a gradient across the wall the bent normal is the better lookup;
     for a sky gradient along the normal it is not."""
-    k_A, b = crease_ao(C_VALUES), crease_bent_normal(C_VALUES)
+    k_A, b = crease_cosine_ao(C_VALUES), crease_bent_normal(C_VALUES)
     n_bent = b / np.linalg.norm(b, axis=1, keepdims=True)
     n = np.tile([0.0, 1.0, 0.0], (len(C_VALUES), 1))
     c_amb = 0.8

@@ -17,8 +17,9 @@ Formats, chosen by the file's suffix:
 - **PFM** (``.pfm``): ``Pf`` (one channel, depth) or ``PF`` (three channels, normals), the
   byte order given by the sign of the scale (negative: little endian), rows stored bottom
   to top.
-- **PNG** (``.png``): 16-bit (or 8-bit) integer depth times ``depth_scale`` (0 is no data:
-  background); an RGB normal map is read as values in [0, 1] (``normal_encoding="unit"``).
+- **PNG** (``.png``, through Pillow): 16-bit (or 8-bit) integer depth times ``depth_scale``
+  (0 is no data: background); an RGB normal map is read as values in [0, 1]
+  (``normal_encoding="unit"``), at 8 bits per channel (Pillow reads a 16-bit colour PNG at 8).
 
 No reader executes anything from a file: no pickles, no ``eval``.
 
@@ -30,7 +31,6 @@ from __future__ import annotations
 
 import os
 import re
-import struct
 import zlib
 from pathlib import Path
 
@@ -60,7 +60,6 @@ NORMAL_CHANNELS = tuple(
 
 #: The file suffixes :func:`read_gbuffer` reads.
 SUFFIXES = (".exr", ".npy", ".npz", ".pfm", ".png")
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 # --------------------------------------------------------------------------- reading
@@ -459,30 +458,34 @@ def write_pfm(path, image) -> Path:
 
 
 # --------------------------------------------------------------------------- PNG
+# Pillow reads and writes the PNGs; it is imported on first use, so that `import vobscure` stays light.
 def _read_png(path) -> np.ndarray:
-    import imageio.v3 as iio
+    """The pixels of a PNG: (H, W) grey or (H, W, C) colour, uint8 or uint16 (16-bit grey).
+
+    Pillow reads a 16-bit colour PNG at 8 bits (the high byte of each sample), and a palette
+    image as the colours of its palette.
+    """
+    from PIL import Image
 
     try:
-        return np.asarray(iio.imread(path))
-    except Exception as exc:
+        with Image.open(path) as image:
+            if image.mode == "P":
+                image = image.convert(image.palette.mode)
+            raw = np.asarray(image)
+    except (OSError, ValueError, SyntaxError) as exc:  # Pillow's errors for a file it cannot decode
         raise ValueError(f"{path}: not a readable PNG ({exc})") from None
+    if raw.dtype.kind in "iu" and raw.dtype.itemsize > 2:
+        # a 16-bit grey PNG opened as 32-bit integers: a PNG sample has at most 16 bits
+        raw = raw.astype(np.uint16)
+    return raw
 
 
-def _png_bytes(image: np.ndarray) -> bytes:
-    """A PNG of an (H, W) or (H, W, 3) uint8 / uint16 image (zlib, no filters)."""
-    a = np.asarray(image)
-    H, W = a.shape[:2]
-    C = 1 if a.ndim == 2 else a.shape[2]
-    bits = 16 if a.dtype == np.uint16 else 8
-    colour = {1: 0, 3: 2}[C]
-    rows = np.ascontiguousarray(a.astype(">u2" if bits == 16 else np.uint8)).reshape(H, -1).view(np.uint8)
-    raw = np.concatenate([np.zeros((H, 1), np.uint8), rows], axis=1).tobytes()  # filter type 0 per row
+def _write_png(path, image: np.ndarray) -> Path:
+    """Write an (H, W) uint8 / uint16 or (H, W, 3) uint8 image as a grey or RGB PNG, atomically."""
+    from PIL import Image
 
-    def chunk(kind, data):
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-
-    ihdr = struct.pack(">IIBBBBB", W, H, bits, colour, 0, 0, 0)
-    return _PNG_SIGNATURE + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b"")
+    picture = Image.fromarray(np.ascontiguousarray(image))
+    return atomic_write(path, lambda fh: picture.save(fh, format="PNG"))
 
 
 # --------------------------------------------------------------------------- writing
@@ -499,9 +502,9 @@ def write_image(path, visibility, *, background=None, bits=8, channel="Y") -> Pa
         Visibility in [0, 1], NaN on background (what every estimator returns).
     background : float or (r, g, b), optional
         PNG only: the colour of NaN pixels, in [0, 1]; a grey level or an RGB triple (an
-        RGB PNG). Default 0 (black).
+        8-bit RGB PNG). Default 0 (black).
     bits : {8, 16}, optional
-        PNG bit depth (default 8).
+        PNG bit depth (default 8); 16 bits are for grey PNGs only.
     channel : str, optional
         EXR channel name (default ``"Y"``, what viewers show as luminance; ``"V"`` also usual).
 
@@ -542,13 +545,16 @@ def write_image(path, visibility, *, background=None, bits=8, channel="Y") -> Pa
         bg = np.atleast_1d(np.asarray(0.0 if background is None else background, dtype=np.float64))
         if bg.shape not in ((1,), (3,)) or not np.all((bg >= 0) & (bg <= 1)):
             raise ValueError(f"background must be a grey level or an (r, g, b) triple in [0, 1], got {background!r}")
+        if bits == 16 and bg.size == 3:
+            raise ValueError("a 16-bit PNG is grey (Pillow writes colour PNGs at 8 bits): give a grey background, "
+                             "or bits=8 for an (r, g, b) background")
         undefined = ~np.isfinite(v)
         levels = np.rint(np.clip(np.where(undefined, 0.0, v.astype(np.float64)), 0.0, 1.0) * top)
         if bg.size == 3:
             levels = np.repeat(levels[:, :, None], 3, axis=2)
         levels[undefined] = np.rint(bg * top)
         image = levels.astype(np.uint16 if bits == 16 else np.uint8)
-        return atomic_write(path, lambda fh: fh.write(_png_bytes(image)))
+        return _write_png(path, image)
     raise ValueError(f"{path}: unknown output format {path.suffix!r}; expected .exr, .png, .npy or .pfm")
 
 

@@ -15,8 +15,9 @@ expected) shapes and dtypes and the recorded checksum. On any mismatch a
 and the entry overwritten.
 
 Where the cache lives: the ``directory`` given, else the environment variable
-``VOBSCURE_CACHE``, else ``$XDG_CACHE_HOME/vobscure``, else ``~/.cache/vobscure``. It is
-created on the first write.
+``VOBSCURE_CACHE``, else the user cache folder of the platform (:func:`default_directory`;
+on Linux ``$XDG_CACHE_HOME/vobscure``, else ``~/.cache/vobscure``). It is created on the
+first write.
 
 Examples
 --------
@@ -51,6 +52,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
+import platformdirs
 
 from .._io import save_npz
 from .._validate import check_choice, check_int, check_positive
@@ -88,22 +90,23 @@ class CacheError(OSError):
 
 # ----------------------------------------------------------------------------- keys
 def default_directory() -> Path:
-    """The default cache folder: ``$VOBSCURE_CACHE``, ``$XDG_CACHE_HOME/vobscure`` or
-    ``~/.cache/vobscure`` (the first that is set; a relative ``XDG_CACHE_HOME`` is ignored,
-    as the XDG specification asks).
+    """The default cache folder: ``$VOBSCURE_CACHE`` if set, else the user cache folder that
+    ``platformdirs`` gives for ``vobscure``.
+
+    That is ``$XDG_CACHE_HOME/vobscure``, else ``~/.cache/vobscure``, on Linux (platformdirs
+    follows the XDG base directory specification; its recent versions ignore a relative
+    ``XDG_CACHE_HOME``, as the specification asks), ``~/Library/Caches/vobscure`` on macOS and
+    ``%LOCALAPPDATA%\\vobscure\\Cache`` on Windows.
 
     Examples
     --------
-    >>> default_directory().name in ("vobscure",) or "VOBSCURE_CACHE" in os.environ
+    >>> default_directory().name in ("vobscure", "Cache") or "VOBSCURE_CACHE" in os.environ
     True
     """
     env = os.environ.get(CACHE_ENV)
     if env:
         return Path(env).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    if xdg and os.path.isabs(xdg):
-        return Path(xdg) / "vobscure"
-    return Path.home() / ".cache" / "vobscure"
+    return platformdirs.user_cache_path("vobscure", appauthor=False)
 
 
 def _plain(value):

@@ -203,15 +203,15 @@ def test_max_edge_that_would_exhaust_memory_is_refused():
 
 
 @pytest.fixture(scope="module")
-def crease():
+def fine_crease():
     mesh = next(iter(vo.scenes.get("crease").meshes.values())).subdivide().subdivide()
     return vo.Scene(mesh)
 
 
 @pytest.fixture(scope="module")
-def crease_reference(crease):
-    p, n, _ = vertex_disks(crease)
-    return {w: vo.ambient_occlusion(crease, p, n, rays=256, weighting=w, max_distance=np.inf, seed=0).value
+def crease_reference(fine_crease):
+    p, n, _ = vertex_disks(fine_crease)
+    return {w: vo.ambient_occlusion(fine_crease, p, n, rays=256, weighting=w, max_distance=np.inf, seed=0).value
             for w in ("cosine", "uniform")}
 
 
@@ -226,18 +226,18 @@ def _rmse(V, ref):
     return float(np.sqrt(np.mean((V - ref) ** 2)))
 
 
-def test_default_term_against_ray_cast(crease, crease_reference):
+def test_default_term_against_ray_cast(fine_crease, crease_reference):
     assert DEFAULT_TERM == "gpugems"
     ref = crease_reference["uniform"]
-    V1, V2 = (bunnell(crease, passes=p, hierarchy=False) for p in (1, 2))
+    V1, V2 = (bunnell(fine_crease, passes=p, hierarchy=False) for p in (1, 2))
     assert _rmse(V1, ref) < RMSE_DEFAULT_MAX and _rmse(V2, ref) < RMSE_DEFAULT_MAX
-    # the crease occludes: not everything is open
+    # the fine_crease occludes: not everything is open
     assert V1.min() < 0.9
 
 
-def test_solid_angle_passes_against_ray_cast(crease, crease_reference):
+def test_solid_angle_passes_against_ray_cast(fine_crease, crease_reference):
     ref = crease_reference["cosine"]
-    V1, V2 = (bunnell(crease, passes=p, term="solid_angle", hierarchy=False) for p in (1, 2))
+    V1, V2 = (bunnell(fine_crease, passes=p, term="solid_angle", hierarchy=False) for p in (1, 2))
     assert _rmse(V1, ref) < RMSE_SOLID_ANGLE_MAX and _rmse(V2, ref) < RMSE_SOLID_ANGLE_MAX
     # the second pass only lightens (its weights are accessibilities <= 1) ...
     assert np.all(V2 >= V1 - EXACT)
@@ -247,53 +247,53 @@ def test_solid_angle_passes_against_ray_cast(crease, crease_reference):
 
 
 @pytest.mark.parametrize("term", TERMS)
-def test_one_pass_is_one_minus_the_row_sums(crease, term):
-    p, n, A = vertex_disks(crease)
+def test_one_pass_is_one_minus_the_row_sums(fine_crease, term):
+    p, n, A = vertex_disks(fine_crease)
     expected = np.clip(1 - disk_shadow(p, n, p, n, A, term=term).sum(axis=1), 0, 1)
-    np.testing.assert_allclose(bunnell(crease, passes=1, term=term, hierarchy=False), expected, atol=EXACT)
+    np.testing.assert_allclose(bunnell(fine_crease, passes=1, term=term, hierarchy=False), expected, atol=EXACT)
 
 
-def test_second_pass_weights_the_emitters_by_the_first(crease):
-    p, n, A = vertex_disks(crease)
+def test_second_pass_weights_the_emitters_by_the_first(fine_crease):
+    p, n, A = vertex_disks(fine_crease)
     S = disk_shadow(p, n, p, n, A)
     V1 = np.clip(1 - S.sum(axis=1), 0, 1)
-    np.testing.assert_allclose(bunnell(crease, hierarchy=False), np.clip(1 - S @ V1, 0, 1), atol=EXACT)
+    np.testing.assert_allclose(bunnell(fine_crease, hierarchy=False), np.clip(1 - S @ V1, 0, 1), atol=EXACT)
 
 
 @pytest.mark.parametrize("hierarchy", [False, True])
-def test_average_is_the_mean_of_the_last_two_passes(crease, hierarchy):
-    V2, V3 = (bunnell(crease, passes=p, hierarchy=hierarchy) for p in (2, 3))
-    np.testing.assert_allclose(bunnell(crease, passes=3, average=True, hierarchy=hierarchy), (V2 + V3) / 2,
+def test_average_is_the_mean_of_the_last_two_passes(fine_crease, hierarchy):
+    V2, V3 = (bunnell(fine_crease, passes=p, hierarchy=hierarchy) for p in (2, 3))
+    np.testing.assert_allclose(bunnell(fine_crease, passes=3, average=True, hierarchy=hierarchy), (V2 + V3) / 2,
                                atol=EXACT)
-    p, n, _ = vertex_disks(crease)
-    np.testing.assert_allclose(bunnell(crease, p, n, passes=3, average=True, hierarchy=hierarchy), (V2 + V3) / 2,
+    p, n, _ = vertex_disks(fine_crease)
+    np.testing.assert_allclose(bunnell(fine_crease, p, n, passes=3, average=True, hierarchy=hierarchy), (V2 + V3) / 2,
                                atol=EXACT)
 
 
-def test_points_at_the_vertices_match_per_vertex(crease):
-    p, n, _ = vertex_disks(crease)
-    np.testing.assert_allclose(bunnell(crease, p, n), bunnell(crease), atol=EXACT)
-    np.testing.assert_allclose(bunnell(crease, p.astype(np.float32), n.astype(np.float32)),
-                               bunnell(crease), atol=FLOAT32)
+def test_points_at_the_vertices_match_per_vertex(fine_crease):
+    p, n, _ = vertex_disks(fine_crease)
+    np.testing.assert_allclose(bunnell(fine_crease, p, n), bunnell(fine_crease), atol=EXACT)
+    np.testing.assert_allclose(bunnell(fine_crease, p.astype(np.float32), n.astype(np.float32)),
+                               bunnell(fine_crease), atol=FLOAT32)
 
 
 @pytest.mark.parametrize("hierarchy", [False, True])
-def test_blocks_do_not_change_the_result(crease, hierarchy):
-    np.testing.assert_allclose(bunnell(crease, block=7, hierarchy=hierarchy), bunnell(crease, hierarchy=hierarchy),
+def test_blocks_do_not_change_the_result(fine_crease, hierarchy):
+    np.testing.assert_allclose(bunnell(fine_crease, block=7, hierarchy=hierarchy), bunnell(fine_crease, hierarchy=hierarchy),
                                atol=EXACT)
 
 
-def test_results_on_a_scene_object_are_cached_and_equal_to_a_fresh_computation(crease, monkeypatch):
+def test_results_on_a_scene_object_are_cached_and_equal_to_a_fresh_computation(fine_crease, monkeypatch):
     calls = []
     real = disks_module.vertex_disks
     monkeypatch.setattr(disks_module, "vertex_disks", lambda *a, **k: calls.append(1) or real(*a, **k))
-    scene = vo.Scene(next(iter(crease.meshes.values())))
+    scene = vo.Scene(next(iter(fine_crease.meshes.values())))
     first = bunnell(scene, passes=3)
     again = [bunnell(scene, passes=p) for p in (1, 2, 3)]      # passes 1-2 computed on the way to 3
     assert len(calls) == 1
     np.testing.assert_array_equal(again[2], first)
     # a mesh (not a Scene) is not cached: same values, computed again
-    np.testing.assert_allclose(bunnell(next(iter(crease.meshes.values())), passes=3), first, atol=EXACT)
+    np.testing.assert_allclose(bunnell(next(iter(fine_crease.meshes.values())), passes=3), first, atol=EXACT)
     assert len(calls) == 2
 
 
@@ -302,16 +302,16 @@ def test_results_on_a_scene_object_are_cached_and_equal_to_a_fresh_computation(c
 
 @pytest.mark.parametrize("passes", [1, 2])
 @pytest.mark.parametrize("term", TERMS)
-def test_tree_that_never_aggregates_is_the_exact_sum(crease, passes, term):
-    np.testing.assert_allclose(bunnell(crease, passes=passes, term=term, open_ratio=np.inf),
-                               bunnell(crease, passes=passes, term=term, hierarchy=False), atol=EXACT)
+def test_tree_that_never_aggregates_is_the_exact_sum(fine_crease, passes, term):
+    np.testing.assert_allclose(bunnell(fine_crease, passes=passes, term=term, open_ratio=np.inf),
+                               bunnell(fine_crease, passes=passes, term=term, hierarchy=False), atol=EXACT)
 
 
 @pytest.mark.parametrize("passes", [1, 2])
 @pytest.mark.parametrize("term", TERMS)
-def test_tree_is_close_to_the_exact_sum(crease, passes, term):
-    V_tree = bunnell(crease, passes=passes, term=term)
-    V = bunnell(crease, passes=passes, term=term, hierarchy=False)
+def test_tree_is_close_to_the_exact_sum(fine_crease, passes, term):
+    V_tree = bunnell(fine_crease, passes=passes, term=term)
+    V = bunnell(fine_crease, passes=passes, term=term, hierarchy=False)
     assert np.abs(V_tree - V).max() < TREE_MAX_DIFF
     assert np.sqrt(np.mean((V_tree - V) ** 2)) < TREE_RMSE
 
@@ -332,66 +332,66 @@ def test_tree_keeps_the_shadow_of_a_far_thin_wall(term):
     np.testing.assert_allclose(tree, exact, atol=TREE_MAX_DIFF * (1 - exact).max())
 
 
-def test_tree_with_points_and_on_a_convex_mesh(crease):
-    p, n, _ = vertex_disks(crease)
-    np.testing.assert_allclose(bunnell(crease, p, n), bunnell(crease), atol=EXACT)
+def test_tree_with_points_and_on_a_convex_mesh(fine_crease):
+    p, n, _ = vertex_disks(fine_crease)
+    np.testing.assert_allclose(bunnell(fine_crease, p, n), bunnell(fine_crease), atol=EXACT)
     V = bunnell(trimesh.creation.icosphere(subdivisions=2), open_ratio=1.0)
     np.testing.assert_allclose(V, 1.0, atol=EXACT)
 
 
-def test_shadow_evaluations(crease):
-    k = len(vertex_disks(crease)[0])
-    assert shadow_evaluations(crease, hierarchy=False) == k * k
-    assert shadow_evaluations(crease, open_ratio=np.inf) == k * k     # every leaf, for every receiver
-    assert shadow_evaluations(crease) < k * k
-    assert shadow_evaluations(crease, open_ratio=2.0) < shadow_evaluations(crease, open_ratio=8.0)
+def test_shadow_evaluations(fine_crease):
+    k = len(vertex_disks(fine_crease)[0])
+    assert shadow_evaluations(fine_crease, hierarchy=False) == k * k
+    assert shadow_evaluations(fine_crease, open_ratio=np.inf) == k * k     # every leaf, for every receiver
+    assert shadow_evaluations(fine_crease) < k * k
+    assert shadow_evaluations(fine_crease, open_ratio=2.0) < shadow_evaluations(fine_crease, open_ratio=8.0)
     p = np.array([[0.5, 0.01, 0.0]])
-    assert shadow_evaluations(crease, p, [[0, 1, 0]], hierarchy=False) == k
+    assert shadow_evaluations(fine_crease, p, [[0, 1, 0]], hierarchy=False) == k
 
 
 # ----------------------------------------------------------------------------- per pixel
 
 
 @pytest.fixture(scope="module")
-def crease_view(crease):
+def fine_crease_gbuffer(fine_crease):
     cam = vo.Camera.look_at((1.5, 1.2, 2.5), (0.3, 0.2, 0.0), size=(24, 18), fov_y=50.0)
-    return vo.render_gbuffer(crease, cam)
+    return vo.render_gbuffer(fine_crease, cam)
 
 
 @pytest.mark.parametrize("kwargs", [{}, {"passes": 1, "term": "form_factor"}, {"hierarchy": False},
                                     {"passes": 3, "average": True}])
-def test_gbuffer_is_the_points_form_at_the_pixels(crease, crease_view, kwargs):
-    gb = crease_view
+def test_gbuffer_is_the_points_form_at_the_pixels(fine_crease, fine_crease_gbuffer, kwargs):
+    gb = fine_crease_gbuffer
     assert gb.valid.any() and not gb.valid.all()
-    V = bunnell_gbuffer(gb, scene=crease, **kwargs)
+    V = bunnell_gbuffer(gb, scene=fine_crease, **kwargs)
     assert V.shape == gb.valid.shape and V.dtype == np.float64
     assert np.all(np.isnan(V[~gb.valid])) and not np.any(np.isnan(V[gb.valid]))
-    expected = bunnell(crease, gb.world_position[gb.valid], gb.world_normal[gb.valid], **kwargs)
+    expected = bunnell(fine_crease, gb.world_position[gb.valid], gb.world_normal[gb.valid], **kwargs)
     np.testing.assert_allclose(V[gb.valid], expected, atol=EXACT)
 
 
-def test_gbuffer_background_only_and_unused_options(crease, crease_view):
+def test_gbuffer_background_only_and_unused_options(fine_crease, fine_crease_gbuffer):
     cam = vo.Camera.look_at((0, 0, 5), (0, 0, 10), size=(4, 3), fov_y=30.0)   # looks away
-    gb = vo.render_gbuffer(crease, cam)
-    assert np.all(np.isnan(bunnell_gbuffer(gb, scene=crease)))
-    a = bunnell_gbuffer(crease_view, scene=crease)
-    b = bunnell_gbuffer(crease_view, scene=crease, radius=0.1, normal_clamp=True, thickness=0.2, seed=5)
+    gb = vo.render_gbuffer(fine_crease, cam)
+    assert np.all(np.isnan(bunnell_gbuffer(gb, scene=fine_crease)))
+    a = bunnell_gbuffer(fine_crease_gbuffer, scene=fine_crease)
+    b = bunnell_gbuffer(fine_crease_gbuffer, scene=fine_crease, radius=0.1, normal_clamp=True, thickness=0.2, seed=5)
     np.testing.assert_array_equal(a, b)
 
 
-def test_gbuffer_needs_a_scene_object(crease_view):
+def test_gbuffer_needs_a_scene_object(fine_crease_gbuffer):
     with pytest.raises(ValueError, match="scene"):
-        bunnell_gbuffer(crease_view, scene="crease")
+        bunnell_gbuffer(fine_crease_gbuffer, scene="crease")
 
 
-def test_registry_entry(crease, crease_view):
+def test_registry_entry(fine_crease, fine_crease_gbuffer):
     m = methods.get("bunnell")
     assert m.fetch == "none" and m.samples is None and m.needs_scene
     assert m.taps(1) == 0 and m.texels(1) == 0
     assert m.reference(False) == m.reference(True) == "sky_uniform"
-    got = m.run(crease_view, scene=crease, radius=0.3, normal_clamp=False, thickness=None, falloff="constant",
+    got = m.run(fine_crease_gbuffer, scene=fine_crease, radius=0.3, normal_clamp=False, thickness=None, falloff="constant",
                 seed=0)
-    np.testing.assert_array_equal(got, bunnell_gbuffer(crease_view, scene=crease, max_edge="auto"))
+    np.testing.assert_array_equal(got, bunnell_gbuffer(fine_crease_gbuffer, scene=fine_crease, max_edge="auto"))
 
 
 @pytest.mark.slow
@@ -425,16 +425,16 @@ def test_compare_runs_bunnell_on_the_cornell_box():
     ({"points": [[0, 0, 0]], "normals": [[0, 0, 1], [0, 0, 1]]}, "normals"),
     ({"points": [[0, 0, 0]], "normals": [[0, 0, 0]]}, "normals"),
 ])
-def test_bunnell_validation_names_the_argument(crease, kwargs, name):
+def test_bunnell_validation_names_the_argument(fine_crease, kwargs, name):
     with pytest.raises(ValueError, match=name):
-        bunnell(crease, **kwargs)
+        bunnell(fine_crease, **kwargs)
 
 
 @pytest.mark.parametrize("kwargs, name", [({"passes": 0}, "passes"), ({"term": "x"}, "term"),
                                           ({"max_edge": -1.0}, "max_edge"), ({"hierarchy": None}, "hierarchy")])
-def test_gbuffer_validation_names_the_argument(crease, crease_view, kwargs, name):
+def test_gbuffer_validation_names_the_argument(fine_crease, fine_crease_gbuffer, kwargs, name):
     with pytest.raises(ValueError, match=name):
-        bunnell_gbuffer(crease_view, scene=crease, **kwargs)
+        bunnell_gbuffer(fine_crease_gbuffer, scene=fine_crease, **kwargs)
 
 
 def test_disk_shadow_validation_names_the_argument():
@@ -448,23 +448,3 @@ def test_disk_shadow_validation_names_the_argument():
         disk_shadow([[0, 0]], [UP], [[0, 0, 1]], [DOWN], [1.0])
     with pytest.raises(ValueError, match="term"):
         disk_shadow([[0, 0, 0]], [UP], [[0, 0, 1]], [DOWN], [1.0], term="Bunnell")
-
-
-# ----------------------------------------------------------------------------- the experiment
-
-
-def test_experiment_rows_are_the_errors_of_the_estimates():
-    from vobscure.experiments.objectspace import VARIANTS, WEIGHTINGS, objectspace_rows
-
-    rows = objectspace_rows(["groove"], terms=["gpugems"], quick=True)
-    assert len(rows) == 2 * len(VARIANTS) * len(WEIGHTINGS)
-    scene = vo.scenes.get("groove")
-    p, n, _ = vertex_disks(scene)          # fewer vertices than the quick subset: all of them
-    ref = vo.ambient_occlusion(scene, p, n, rays=64, weighting="uniform", max_distance=np.inf, seed=0)
-    err = bunnell(scene, passes=2) - ref.value
-    row = next(r for r in rows if (r["where"], r["passes"], r["weighting"]) == ("vertex", "2", "uniform"))
-    assert row["rmse"] == pytest.approx(np.sqrt(np.mean(err ** 2)), abs=EXACT)
-    assert row["bias"] == pytest.approx(err.mean(), abs=EXACT)
-    assert row["ref_stderr"] == pytest.approx(ref.stderr.mean(), abs=EXACT)
-    gb = vo.render_gbuffer(scene, scene.camera((32, 32)))
-    assert all(r["receivers"] == int(gb.valid.sum()) for r in rows if r["where"] == "pixel")

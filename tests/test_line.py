@@ -1,4 +1,8 @@
-"""Screen-space VO (Loos & Sloan 2010): line and point sampling and the converged reference."""
+"""Screen-space VO by line sampling (Loos & Sloan 2010; vobscure.screenspace.line): planes,
+the closed forms of the orthographic crease, the kernel against a pixel-by-pixel version.
+The properties line and point sampling share (scale invariance, float32, seeds, thickness,
+extremes, arguments) are tested here for both; point sampling and the converged reference
+on their own: test_point.py."""
 
 from __future__ import annotations
 
@@ -6,12 +10,12 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy import stats
 
 import vobscure as vo
 from vobscure.gbuffer import GBuffer
 
-from conftest import FALSE_FAILURE
+from analytic import SLAB_VO, SLAB_VO_CLAMPED, crease_vo, crease_vo_clamped
+from conftest import CREASE_RADIUS, interior
 
 #: Flat surfaces: the depth buffer holds Embree's float32 hits, so planes are exact to ~1e-5.
 PLANE_TOL = 1e-3
@@ -29,30 +33,7 @@ FLOAT32_TOL = 2e-6
 #: Two float64 evaluations of the same sums in a different order.
 KERNEL_TOL = 1e-12
 
-R_CREASE = 1.0
-SIZE = 128
-
-
-def ball_vo(c):
-    return 0.5 - (1 - c) ** 2 * (2 + c) / 8
-
-
-def half_ball_vo(c):
-    return 1 - (1 - c) ** 2 * (2 + c) / 4
-
-
-def interior(gb, radius, margin=1.0):
-    """Pixels whose whole sample disk lies on the image (off-screen taps legitimately differ)."""
-    H, W = gb.shape
-    rp = radius * np.asarray(gb.camera.pixels_per_unit(np.where(gb.valid, gb.depth, 1.0)))
-    i, j = np.mgrid[0:H, 0:W]
-    return (gb.valid & (j + 0.5 - rp - margin > 0) & (j + 0.5 + rp + margin < W)
-            & (i + 0.5 - rp - margin > 0) & (i + 0.5 + rp + margin < H))
-
-
-@pytest.fixture(scope="module")
-def big_slab():
-    return vo.scenes.slab(size=200.0)
+R_CREASE = CREASE_RADIUS
 
 
 CAMERAS = {
@@ -76,35 +57,8 @@ def test_line_exact_on_planes(big_slab, view, radius):
         for fetch in ("nearest", "bilinear"):
             v = vo.vo_line(gb, radius=radius, samples=samples, fetch=fetch, seed=1)
             vc = vo.vo_line(gb, radius=radius, samples=samples, fetch=fetch, normal_clamp=True, seed=1)
-            assert np.max(np.abs(v[inside] - 0.5)) < PLANE_TOL, (samples, fetch)
-            assert np.max(np.abs(vc[inside] - 1.0)) < PLANE_TOL, (samples, fetch)
-
-
-@pytest.mark.parametrize("view", ["persp-oblique", "ortho-oblique"])
-def test_point_exact_on_planes_with_symmetric_patterns(big_slab, view):
-    kw = dict(CAMERAS[view])
-    cam = vo.Camera.look_at(kw.pop("eye"), (0, 0, 0), size=(64, 48), **kw)
-    gb = vo.render_gbuffer(big_slab, cam)
-    inside = interior(gb, 0.3)
-    for n in (12, 13, 33):
-        assert vo.patterns.ball(n).has_center == (n % 2 == 1)
-        v = vo.vo_point(gb, radius=0.3, samples=n)
-        vc = vo.vo_point(gb, radius=0.3, samples=n, normal_clamp=True)
-        # antipodal pairs: one of each pair lies below the plane (bilinear 1/z reconstructs
-        # it); the centre of odd n lies on it and counts half (open when clamped): before
-        # that rule a plane read 0.5 + w_centre / 2 (0.530 with 13 samples)
-        assert np.max(np.abs(v[inside] - 0.5)) < PLANE_TOL, n
-        assert np.max(np.abs(vc[inside] - 1.0)) < PLANE_TOL, n
-
-
-@pytest.fixture(scope="module")
-def crease_view():
-    scene = vo.scenes.crease()
-    cam = vo.Camera.look_at((3, 3, 1.0), (0.4, 0.2, 0), size=(SIZE, SIZE), ortho_height=4.0)
-    gb = vo.render_gbuffer(scene, cam)
-    x, y = gb.world_position[..., 0], gb.world_position[..., 1]
-    floor = interior(gb, R_CREASE) & (np.abs(y) < 1e-9) & (x > 0.05 * R_CREASE) & (x < 0.95 * R_CREASE)
-    return gb, floor, x[floor] / R_CREASE
+            assert np.max(np.abs(v[inside] - SLAB_VO)) < PLANE_TOL, (samples, fetch)
+            assert np.max(np.abs(vc[inside] - SLAB_VO_CLAMPED)) < PLANE_TOL, (samples, fetch)
 
 
 def test_line_converges_to_closed_forms_orthographic(crease_view):
@@ -116,45 +70,11 @@ def test_line_converges_to_closed_forms_orthographic(crease_view):
     for n in (9, 33, 129):
         v = vo.vo_line(gb, radius=R_CREASE, samples=n, randomize=False)
         vh = vo.vo_line(gb, radius=R_CREASE, samples=n, randomize=False, normal_clamp=True)
-        rmse[n] = (np.sqrt(np.mean((v[floor] - ball_vo(c)) ** 2)),
-                   np.sqrt(np.mean((vh[floor] - half_ball_vo(c)) ** 2)))
+        rmse[n] = (np.sqrt(np.mean((v[floor] - crease_vo(c)) ** 2)),
+                   np.sqrt(np.mean((vh[floor] - crease_vo_clamped(c)) ** 2)))
     assert rmse[129][0] < rmse[33][0] < rmse[9][0]
     assert rmse[129][1] < rmse[33][1] < rmse[9][1]
     assert rmse[129][0] < LINE_QUADRATURE_TOL and rmse[129][1] < LINE_QUADRATURE_TOL
-
-
-def _noise_pairs(gb, floor, **kw):
-    r1 = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=11, **kw).value
-    r2 = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=12, **kw).value
-    return r1, r2
-
-
-def test_reference_is_unbiased_on_the_crease(crease_view):
-    """vo_reference is Monte Carlo: its mean error over the floor pixels is tested against
-    the spread of two independent references (a z-test), not against a fixed tolerance."""
-    gb, floor, c = crease_view
-    for kw, exact in ((dict(), ball_vo(c)), (dict(normal_clamp=True), half_ball_vo(c))):
-        r1, r2 = _noise_pairs(gb, floor, **kw)
-        sd = np.std((r1 - r2)[floor]) / np.sqrt(2)          # per-pixel noise of one reference
-        n_eff = min(floor.sum(), 64 * 64)                    # the noise texture tiles every 64 px
-        z = np.mean(r1[floor] - exact) / (sd / np.sqrt(n_eff))
-        assert abs(z) < stats.norm.ppf(1 - FALSE_FAILURE / 2), (kw, z)
-
-
-def test_estimators_converge_to_reference(crease_view):
-    gb, floor, _ = crease_view
-    r1, r2 = _noise_pairs(gb, floor)
-    noise_var = np.mean(((r1 - r2)[floor]) ** 2) / 2
-    n_eff = min(floor.sum(), 64 * 64)
-    # line with many samples: its squared difference to the reference is the reference's
-    # own noise (F test of the two variance estimates)
-    line = vo.vo_line(gb, radius=R_CREASE, samples=257, randomize=False)
-    ratio = np.mean((line - r1)[floor] ** 2) / noise_var
-    assert ratio < stats.f.ppf(1 - FALSE_FAILURE, n_eff, n_eff)
-    # every estimator gets closer as samples grow
-    for fn, counts in ((vo.vo_line, (5, 33)), (vo.vo_point, (12, 129))):
-        err = [np.sqrt(np.mean((fn(gb, radius=R_CREASE, samples=n)[floor] - r1[floor]) ** 2)) for n in counts]
-        assert err[1] < err[0], (fn.__name__, err)
 
 
 def test_perspective_line_approximation_is_measured(big_slab):
@@ -239,8 +159,8 @@ def test_quadratic_falloff_on_planes(big_slab):
     inside = interior(gb, 0.3)
     v = vo.vo_line(gb, radius=0.3, samples=9, falloff="quadratic")
     vc = vo.vo_line(gb, radius=0.3, samples=9, falloff="quadratic", normal_clamp=True)
-    assert np.max(np.abs(v[inside] - 0.5)) < PLANE_TOL
-    assert np.max(np.abs(vc[inside] - 1.0)) < PLANE_TOL
+    assert np.max(np.abs(v[inside] - SLAB_VO)) < PLANE_TOL
+    assert np.max(np.abs(vc[inside] - SLAB_VO_CLAMPED)) < PLANE_TOL
 
 
 def _silent(fn, *args, **kw):
@@ -293,7 +213,7 @@ def test_zero_depth_variance_plane_facing_camera():
     assert np.ptp(gb.depth) == 0
     inside = interior(gb, 0.2)
     for fn in (vo.vo_line, vo.vo_point):
-        assert np.max(np.abs(fn(gb, radius=0.2)[inside] - 0.5)) < PLANE_TOL
+        assert np.max(np.abs(fn(gb, radius=0.2)[inside] - SLAB_VO)) < PLANE_TOL
 
 
 def test_bad_arguments(crease_view):
@@ -315,22 +235,6 @@ def test_bad_arguments(crease_view):
         vo.vo_point(gb, radius=1, samples=vo.patterns.disk(5))
     with pytest.raises(ValueError, match="gbuffer"):
         vo.vo_line(np.zeros((4, 4)), radius=1)
-
-
-def test_patterns_are_symmetric_with_footnote5_weights():
-    for n in (1, 2, 5, 9, 16):
-        p = vo.patterns.disk(n)
-        assert p.is_symmetric and p.points.shape == (n, 2)
-        assert np.isclose(p.weights.sum(), 1.0)
-        assert np.all(np.sum(p.points ** 2, axis=1) <= 1 + 1e-12)
-    # one centre sample stands for the whole disk
-    assert np.array_equal(vo.patterns.disk(1).points, [[0.0, 0.0]])
-    # footnote 5: a region near the rim has a smaller z-extent than one near the centre
-    p = vo.patterns.disk(5)
-    centre = np.argmin(np.sum(p.points ** 2, axis=1))
-    assert p.weights[centre] > np.max(np.delete(p.weights, centre)) * 0.9
-    q = vo.patterns.ball(12)
-    assert q.is_symmetric and q.points.shape == (12, 3)
 
 
 def _line_by_hand(gb, radius, pattern, texture, offscreen, clamp):
@@ -417,102 +321,3 @@ def test_clamped_line_constant_denominator_for_antipodal_patterns(samples, monke
     np.testing.assert_allclose(fast[valid], full[valid], rtol=0, atol=1e-12)
 
 
-# ----------------------------------------------------------------------------- vo_reference
-#: Probability that one of the reference's statistical tests below fails although the code is
-#: right (each test splits it over its assertions, Bonferroni).
-REFERENCE_FALSE_FAILURE = FALSE_FAILURE
-
-
-def _reference_floor(crease_view, c_max=0.8):
-    """Floor pixels of the orthographic crease with c < c_max (beyond, a group can miss the
-    wall's small cap entirely: docs/groundtruth.md, "When the standard error degenerates")."""
-    gb, floor, c = crease_view
-    keep = np.zeros_like(floor)
-    keep[floor] = c < c_max
-    return gb, keep, c[c < c_max]
-
-
-@pytest.mark.parametrize("normal_clamp", [False, True])
-def test_reference_stderr_is_honest_against_closed_forms(crease_view, normal_clamp):
-    """Every floor pixel's t-score against the closed-form ball / half-ball VO, with the
-    reported stderr (groups - 1 degrees of freedom), Bonferroni over the pixels."""
-    from conftest import t_threshold
-    from vobscure.estimate import DEFAULT_GROUPS
-
-    gb, floor, c = _reference_floor(crease_view)
-    e = vo.vo_reference(gb, radius=R_CREASE, samples=1024, normal_clamp=normal_clamp, seed=21)
-    assert isinstance(e, vo.Estimate) and e.value.shape == e.stderr.shape == gb.shape
-    assert e.samples == 1024
-    assert np.isnan(e.value[~gb.valid]).all() and np.isnan(e.stderr[~gb.valid]).all()
-    exact = half_ball_vo(c) if normal_clamp else ball_vo(c)
-    z = (e.value[floor] - exact) / e.stderr[floor]
-    assert np.all(e.stderr[floor] > 0)
-    limit = t_threshold(DEFAULT_GROUPS - 1, tests=2 * z.size, false_failure=REFERENCE_FALSE_FAILURE)
-    assert np.max(np.abs(z)) < limit, (np.abs(z).max(), limit)
-
-
-def test_reference_stderr_matches_the_spread_over_seeds(crease_view):
-    """The reported stderr is the standard deviation of the value over seeds: at each of a
-    few pixels, the variance of the values over independent seeds against the mean reported
-    variance is F-distributed (seeds - 1 and seeds (groups - 1) degrees of freedom)."""
-    from vobscure.estimate import DEFAULT_GROUPS
-
-    gb, floor, c = _reference_floor(crease_view)
-    rows, cols = np.nonzero(floor)
-    pick = np.linspace(0, len(rows) - 1, 8).astype(int)        # spread over the floor
-    seeds = 12
-    runs = [vo.vo_reference(gb, radius=R_CREASE, samples=256, seed=100 + s) for s in range(seeds)]
-    values = np.array([r.value[rows[pick], cols[pick]] for r in runs])     # (seeds, pixels)
-    reported = np.array([r.stderr[rows[pick], cols[pick]] for r in runs]) ** 2
-    ratio = values.var(axis=0, ddof=1) / reported.mean(axis=0)
-    alpha = REFERENCE_FALSE_FAILURE / (2 * len(pick))
-    lo, hi = stats.f.ppf([alpha, 1 - alpha], seeds - 1, seeds * (DEFAULT_GROUPS - 1))
-    assert np.all((ratio > lo) & (ratio < hi)), (ratio, lo, hi)
-
-
-def test_reference_is_deterministic_by_seed(crease_view):
-    gb, _, _ = crease_view
-    a = vo.vo_reference(gb, radius=0.5, samples=128, seed=4)
-    b = vo.vo_reference(gb, radius=0.5, samples=128, seed=4)
-    c = vo.vo_reference(gb, radius=0.5, samples=128, seed=5)
-    for x, y in ((a.value, b.value), (a.stderr, b.stderr)):
-        assert x.tobytes() == y.tobytes()
-    assert a.samples == b.samples
-    assert not np.array_equal(a.value, c.value, equal_nan=True)
-    # a Generator is consumed, not copied: two calls from one Generator differ
-    rng = np.random.default_rng(4)
-    assert not np.array_equal(vo.vo_reference(gb, radius=0.5, samples=128, seed=rng).value,
-                              vo.vo_reference(gb, radius=0.5, samples=128, seed=rng).value, equal_nan=True)
-
-
-def test_reference_sample_counts_and_groups(crease_view):
-    gb, _, _ = crease_view
-    small = gb.astype(np.float32)
-    e = vo.vo_reference(small, radius=0.5, samples=100, groups=4, seed=0)
-    assert e.samples == 104                       # rounded up to a multiple of 2 * groups
-    assert e.value.dtype == np.float32 and e.stderr.dtype == np.float32
-    assert vo.vo_reference(gb, radius=0.5, samples=2, seed=0).samples == 2 * 8
-    for bad in (dict(groups=1), dict(groups=2.5), dict(samples=1), dict(samples=vo.patterns.disk(5))):
-        with pytest.raises(ValueError, match="groups" if "groups" in bad else "samples"):
-            vo.vo_reference(gb, radius=0.5, **{"samples": 64, **bad})
-
-
-def test_reference_accepts_a_sample_pattern(crease_view, big_slab):
-    """A ball pattern: each group is the pattern under its own random per-pixel reflection."""
-    gb, floor, c = crease_view
-    pattern = vo.patterns.ball(33)
-    e = vo.vo_reference(gb, radius=R_CREASE, samples=pattern, seed=2)
-    assert e.samples == 8 * 33
-    assert np.isnan(e.value[~gb.valid]).all() and np.isfinite(e.value[gb.valid]).all()
-    assert np.all(e.stderr[floor] > 0)
-    again = vo.vo_reference(gb, radius=R_CREASE, samples=pattern, seed=2)
-    assert e.value.tobytes() == again.value.tobytes()
-    # the mean of vo_point's randomizations: close to the converged value on the crease
-    dense = vo.vo_reference(gb, radius=R_CREASE, samples=2048, seed=3)
-    assert abs(np.mean(e.value[floor] - dense.value[floor])) < 0.02
-    # a point-symmetric pattern is exact on a plane under any reflection: stderr 0 there
-    cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(32, 24), ortho_height=2.0)
-    plane = vo.render_gbuffer(big_slab, cam)
-    inside = interior(plane, 0.3)
-    p = vo.vo_reference(plane, radius=0.3, samples=vo.patterns.ball(12), normal_clamp=True, seed=0)
-    assert np.max(np.abs(p.value[inside] - 1.0)) < PLANE_TOL
