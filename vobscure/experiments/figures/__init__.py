@@ -11,7 +11,7 @@ A figure module ``NAME.py`` in this package defines
     Draws on the matplotlib ``Figure`` it is given, from the rows read back from those files
     (matplotlib only; nothing is measured), which the driver writes as ``NAME.png``.
 
-and optionally ``FIGSIZE`` (inches, default :data:`DEFAULT_FIGSIZE`), ``ORDER`` (its place in
+and optionally ``FIGSIZE`` (inches, default :data:`DEFAULT_FIGSIZE`), ``DPI`` (default 100), ``ORDER`` (its place in
 :func:`names`), and ``markdown(rows) -> str`` (tables for the docs, written as ``NAME.md``).
 A ``measure`` that takes a keyword ``claims`` is given the claims' measurement
 (:func:`~vobscure.experiments.figures._common.claims_measurements`), measured once per
@@ -95,7 +95,7 @@ def plot(name: str, rows, *, package: str = __name__):
     from ..common import new_figure
 
     mod = module(name, package)
-    fig = new_figure(*getattr(mod, "FIGSIZE", DEFAULT_FIGSIZE))
+    fig = new_figure(*getattr(mod, "FIGSIZE", DEFAULT_FIGSIZE), dpi=getattr(mod, "DPI", 100))
     mod.plot(rows, fig)
     return fig
 
