@@ -20,7 +20,7 @@ import numpy as np
 from ..common import save_figure, write_csv
 
 __all__ = ["BACKGROUND", "FULL_SIZE", "QUICK_SIZE", "CSV_DIGITS", "SCENE_NAMES", "Profile", "Rows",
-           "write_rows", "read_rows", "claims_measurements", "image_panel", "error_panel", "corr", "fmt"]
+           "write_rows", "read_rows", "claims_measurements", "compare_rows", "per_scene", "image_panel", "error_panel", "pixel_rmse", "corr", "fmt"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
@@ -107,6 +107,8 @@ class Rows(list):
         Images and curves (numeric arrays), written beside the CSV as ``<name>.npz``.
     meta : dict, optional
         Scalars, strings and lists for titles (JSON), written into the same ``.npz``.
+    digits : int or None, optional
+        Significant digits of the CSV's floats; default :data:`CSV_DIGITS`; None: exact.
 
     Examples
     --------
@@ -115,7 +117,7 @@ class Rows(list):
     (1, 0.5, ('n', 'rmse'), (2, 2), {'seed': 0})
     """
 
-    def __init__(self, rows=(), *, columns=None, arrays=None, meta=None):
+    def __init__(self, rows=(), *, columns=None, arrays=None, meta=None, digits: int | None = CSV_DIGITS):
         super().__init__(dict(r) for r in rows)
         if columns is None:
             columns = []
@@ -124,6 +126,7 @@ class Rows(list):
         self.columns = tuple(columns)
         self.arrays = {k: np.asarray(v) for k, v in (arrays or {}).items()}
         self.meta = dict(meta or {})
+        self.digits = digits
 
 
 def _parse_cell(text: str):
@@ -142,7 +145,7 @@ def _parse_cell(text: str):
 
 
 def write_rows(rows: Rows, csv_path, npz_path=None) -> list[Path]:
-    """Write ``rows`` as CSV (floats to :data:`CSV_DIGITS` significant digits, booleans 0 / 1,
+    """Write ``rows`` as CSV (floats to ``rows.digits`` significant digits, booleans 0 / 1,
     None empty) and, when they carry arrays or meta, those as ``npz_path``; atomically.
 
     Returns
@@ -152,7 +155,7 @@ def write_rows(rows: Rows, csv_path, npz_path=None) -> list[Path]:
     """
     from ..._io import atomic_write
 
-    paths = [write_csv(csv_path, rows, rows.columns, digits=CSV_DIGITS)]
+    paths = [write_csv(csv_path, rows, rows.columns, digits=rows.digits)]
     if npz_path is not None and (rows.arrays or rows.meta):
         payload = dict(rows.arrays, __meta__=np.array(json.dumps(rows.meta, sort_keys=True)))
         paths.append(atomic_write(Path(npz_path), lambda fh: np.savez_compressed(fh, **payload)))
@@ -200,6 +203,25 @@ def claims_measurements(profile: Profile) -> dict:
             for scene in claims.SCENES}
 
 
+def compare_rows(scenes, columns, *, extra=None, **options) -> Rows:
+    """The rows of :func:`vobscure.experiments.compare.compare` (``options``; no progress, no
+    files) for each scene, each row with its ``scene`` and the ``extra`` keys, as :class:`Rows`
+    with ``columns``."""
+    from ..compare import compare
+
+    rows = []
+    for scene in scenes:
+        res = compare(scene, progress=False, out=None, plots=False, write=False, **options)
+        rows += [dict(row, scene=scene, **(extra or {})) for row in res.rows]
+    return Rows(rows, columns=columns)
+
+
+def per_scene(rows, scene):
+    """The rows of ``scene``, their labels ("line 5") and bar positions 0, 1, ..."""
+    sel = [r for r in rows if r["scene"] == scene]
+    return sel, [f"{r['method']} {r['samples']}" for r in sel], np.arange(len(sel))
+
+
 def image_panel(ax, image, title=None, *, vmin=0.0, vmax=1.0, cmap="gray", fontsize=9.5):
     """Show an (H, W) visibility image, NaN (background) in :data:`BACKGROUND`; no ticks."""
     import matplotlib as mpl
@@ -218,6 +240,13 @@ def error_panel(ax, estimate, truth, title=None, *, limit=0.5, fontsize=9.5):
     """Signed error ``estimate - truth`` in a diverging map (blue: too open, red: too dark)."""
     diff = np.asarray(estimate, dtype=np.float64) - np.asarray(truth, dtype=np.float64)
     return image_panel(ax, diff, title, vmin=-limit, vmax=limit, cmap="RdBu", fontsize=fontsize)
+
+
+def pixel_rmse(model, truth) -> float:
+    """RMSE over the pixels finite in both images; NaN if none."""
+    model, truth = np.asarray(model, dtype=np.float64), np.asarray(truth, dtype=np.float64)
+    ok = np.isfinite(truth) & np.isfinite(model)
+    return float(np.sqrt(np.mean((model[ok] - truth[ok]) ** 2))) if ok.any() else float("nan")
 
 
 def corr(a, b, mask=None) -> float:
