@@ -334,9 +334,9 @@ def measurement(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256, q
     """The run behind :func:`line_vs_point`: G-buffer, estimates, references, rows.
 
     Same arguments as :func:`line_vs_point`; measured at each call (pass the result on, as
-    ``measured=`` of :func:`thickness_at_silhouettes` and :func:`normals_on_off`, to share it). ``images[(label, normal_clamp)]`` holds each
-    configuration's (H, W) estimate at ``seed``, ``reference[normal_clamp]`` the converged
-    screen-space VO, ``truth[normal_clamp]`` the ground-truth :class:`~vobscure.Estimate`,
+    ``measured=`` of :func:`thickness_at_silhouettes` and :func:`normals_on_off`, to share it).
+    ``images[(label, normal_clamp)]`` holds each configuration's (H, W) estimate at ``seed``,
+    ``reference[normal_clamp]`` the converged screen-space VO, ``truth[normal_clamp]`` the ground-truth :class:`~vobscure.Estimate`,
     ``ao`` the ray-cast AO within the radius. The figure module draws from it.
     """
     scene_name, size, radius, seed, rays = _check_args(scene_name, size, radius, seed, rays)

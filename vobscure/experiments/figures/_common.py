@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..common import save_figure, write_csv
+from ..common import write_csv
 
 __all__ = ["BACKGROUND", "FULL_SIZE", "QUICK_SIZE", "CSV_DIGITS", "SCENE_NAMES", "Profile", "Rows",
-           "write_rows", "read_rows", "claims_measurements", "compare_rows", "per_scene", "image_panel", "error_panel", "pixel_rmse", "corr", "fmt"]
+           "write_rows", "read_rows", "claims_measurements", "compare_rows", "per_scene", "image_panel",
+           "error_panel", "pixel_rmse", "log_log", "corr", "fmt"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
@@ -175,8 +176,10 @@ def read_rows(csv_path, npz_path=None) -> Rows:
     ...                 arrays={"x": np.arange(3.0)}, meta={"seed": 7})
     ...     _ = write_rows(rows, f"{tmp}/f.csv", f"{tmp}/f.npz")
     ...     back = read_rows(f"{tmp}/f.csv", f"{tmp}/f.npz")
-    >>> back[0], back.columns, back.arrays["x"].tolist(), back.meta
-    ({'a': 1, 'b': 1, 'c': None, 'd': 0.333333, 'e': 'lines 9'}, ('a', 'b', 'c', 'd', 'e'), [0.0, 1.0, 2.0], {'seed': 7})
+    >>> back[0]
+    {'a': 1, 'b': 1, 'c': None, 'd': 0.333333, 'e': 'lines 9'}
+    >>> back.columns, back.arrays["x"].tolist(), back.meta
+    (('a', 'b', 'c', 'd', 'e'), [0.0, 1.0, 2.0], {'seed': 7})
     """
     with open(csv_path, newline="", encoding="utf-8") as fh:
         reader = csv.reader(fh)
@@ -247,6 +250,19 @@ def pixel_rmse(model, truth) -> float:
     model, truth = np.asarray(model, dtype=np.float64), np.asarray(truth, dtype=np.float64)
     ok = np.isfinite(truth) & np.isfinite(model)
     return float(np.sqrt(np.mean((model[ok] - truth[ok]) ** 2))) if ok.any() else float("nan")
+
+
+def log_log(ax) -> None:
+    """Both axes of ``ax`` logarithmic, ticks at 1, 2, 5 x 10^k labelled plainly, a light grid."""
+    from matplotlib.ticker import FormatStrFormatter, LogLocator
+
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.set_minor_formatter(FormatStrFormatter(""))
+    ax.grid(True, which="both", color="0.9", lw=0.6)
 
 
 def corr(a, b, mask=None) -> float:

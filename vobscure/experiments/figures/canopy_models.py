@@ -24,8 +24,6 @@ I3D 2006, Sec. 3 (Eqs. 4-8, the Poisson argument).
 
 from __future__ import annotations
 
-import numpy as np
-
 from ._common import Rows
 
 __all__ = ["measure", "plot", "SCENES"]

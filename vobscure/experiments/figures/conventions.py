@@ -1,6 +1,7 @@
 """The conventions figure: spaces, pixels, a real G-buffer and the visibility of the crease.
 
-One PNG, ``conventions.png`` (and the numbers of panel (d), ``conventions.csv``), that a new user reads beside ``docs/conventions.md``:
+One PNG, ``conventions.png`` (and the numbers of panel (d), ``conventions.csv``), that a new user
+reads beside ``docs/conventions.md``:
 
 (a) world space (right-handed, y up) and view space (x right, y up, z = depth > 0 in
     front of the camera) in a side view of the camera that renders panel (c);

@@ -1,6 +1,7 @@
 """Why an estimator is off: its error split into sampling, screen-space and model error.
 
-One PNG, ``error_decomposition.png``, and its numbers, ``error_decomposition.csv``, from :func:`vobscure.experiments.compare.compare` on the
+One PNG, ``error_decomposition.png``, and its numbers, ``error_decomposition.csv``, from
+:func:`vobscure.experiments.compare.compare` on the
 Cornell box and the blob, for lines 5 and 9, points 12 and 33 and one area sample, with the
 normal (``normal_clamp=True``: half-ball VO, which reads 1 on an open flat surface as AO does;
 unclamped ball VO reads 0.5 there and its model term would be mostly that constant):

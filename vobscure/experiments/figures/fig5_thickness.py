@@ -67,8 +67,7 @@ def measure(profile, *, claims=None) -> Rows:
         Quick: thicknesses 0.25, 1 and 4 R; full: 11 from 0.125 to 4 R (half octaves).
         Image size and seed as the profile's.
     claims : dict, optional
-        :func:`~vobscure.experiments.figures._common.claims_measurements` of ``profile``, when
-        already measured (the driver passes it); measured when omitted.
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------

@@ -24,7 +24,8 @@ seed 0. Estimates, ground truths and ray-cast AO are those of
 
 "Finer-scale detail" (Sec. 4.4) is a visual claim; (c) and (d) are its measurable proxies.
 
-Regenerate with ``vobscure figures fig6_normals --out docs/img`` (a few minutes, most of it the two scenes' ground truths; ``--quick`` in seconds).
+Regenerate with ``vobscure figures fig6_normals --out docs/img`` (a few minutes, most of it the two
+scenes' ground truths; ``--quick`` in seconds).
 
 References
 ----------
@@ -60,8 +61,7 @@ def measure(profile, *, claims=None) -> Rows:
     profile : Profile
         Image size and seed; quick: fewer reference samples.
     claims : dict, optional
-        :func:`~vobscure.experiments.figures._common.claims_measurements` of ``profile``, when
-        already measured (the driver passes it); measured when omitted.
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------

@@ -27,7 +27,8 @@ pattern, which ``vo_point`` does not tap), is in the CSV beside them.
 configurations against the ground truth and against taps; ``docs/results.md`` has the full
 tables.
 
-Regenerate with ``vobscure figures fig7_lines_vs_points --out docs/img`` (a few minutes, most of it the two scenes' references; ``--quick`` in seconds).
+Regenerate with ``vobscure figures fig7_lines_vs_points --out docs/img`` (a few minutes, most of it
+the two scenes' references; ``--quick`` in seconds).
 
 References
 ----------
@@ -61,8 +62,7 @@ def measure(profile, *, claims=None) -> Rows:
         warm-up; full: lines 3-16 and points 6-48 (6 counts each), 3 timed runs. Image size
         and seed as the profile's.
     claims : dict, optional
-        :func:`~vobscure.experiments.figures._common.claims_measurements` of ``profile``, when
-        already measured (the driver passes it); measured when omitted.
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------
@@ -163,9 +163,7 @@ def _image_rows(top, bottom, rows):
 
 def _curves(subfig, rows, scenes):
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import FormatStrFormatter, LogLocator
-
-    from ._common import SCENE_NAMES
+    from ._common import SCENE_NAMES, log_log
 
     panels = [(s, nc) for s in scenes for nc in (False, True)]
     axes = subfig.subplots(1, len(panels))
@@ -184,13 +182,7 @@ def _curves(subfig, rows, scenes):
                     ax.plot([r["ms"]], [r["rmse_ref"]], "o", ms=11, mfc="none", mec=color, mew=1.6)
                 ax.annotate(str(r["samples"]), xy=(r["ms"], r["rmse_ref"]), xytext=(3, 3),
                             textcoords="offset points", fontsize=7.5, color=color)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        for axis in (ax.xaxis, ax.yaxis):
-            axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-            axis.set_major_formatter(FormatStrFormatter("%g"))
-            axis.set_minor_formatter(FormatStrFormatter(""))
-        ax.grid(True, which="both", color="0.9", lw=0.6)
+        log_log(ax)
         ax.set_xlabel("median ms per frame (log)")
         ax.set_ylabel("RMSE vs converged screen-space VO (log)")
         ax.set_title(f"({letter}) {SCENE_NAMES.get(scene, scene)}, {'half-ball' if nc else 'ball'}",

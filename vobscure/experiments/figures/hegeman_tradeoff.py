@@ -19,7 +19,8 @@ rows of :func:`vobscure.experiments.trees.convergence_rows` (``table`` = ``"conv
 (d) The paper's cost claim: time per point of Eq. 6 relative to ambient only (a constant) and
     to Reeves-Blau, beside the paper's 2300 / 460 = 5.0 and 580 / 460 = 1.26.
 
-Regenerate with ``vobscure figures hegeman_tradeoff --out docs/img`` (about a minute; ``--quick`` in seconds; times vary from run to run).
+Regenerate with ``vobscure figures hegeman_tradeoff --out docs/img`` (about a minute; ``--quick`` in
+seconds; times vary from run to run).
 
 References
 ----------

@@ -44,8 +44,7 @@ def measure(profile, *, claims=None) -> Rows:
     profile : Profile
         Image size ``profile.size`` (256 x 256; 48 x 48 and fewer reference samples quick), seed.
     claims : dict, optional
-        :func:`~vobscure.experiments.figures._common.claims_measurements` of ``profile``,
-        when already measured (the driver passes it); measured when omitted.
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------
@@ -111,9 +110,7 @@ def _image_row(subfig, rows, normal_clamp, letter):
 
 def _scatter_row(subfig, rows):
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import FormatStrFormatter, LogLocator
-
-    from ._common import SCENE_NAMES
+    from ._common import SCENE_NAMES, log_log
 
     axes = subfig.subplots(1, 3)
     specs = [("ms", "rmse_ref", "(c) error against the converged screen-space VO, over time",
@@ -139,16 +136,10 @@ def _scatter_row(subfig, rows):
                     if a in by and b in by:
                         ax.plot([by[a][xkey], by[b][xkey]], [by[a][ykey], by[b][ykey]], color="0.75",
                                 lw=0.8, ls="--" if nc else "-", zorder=1)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        for axis in (ax.xaxis, ax.yaxis):
-            axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-            axis.set_major_formatter(FormatStrFormatter("%g"))
-            axis.set_minor_formatter(FormatStrFormatter(""))
+        log_log(ax)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=11)
-        ax.grid(True, which="both", color="0.9", lw=0.6)
     configs = list(dict.fromkeys(r["config"] for r in rows))
     handles = [Line2D([], [], ls="", marker="o", ms=8, color=_COLORS.get(c, "0.4"), label=c) for c in configs]
     handles += [Line2D([], [], ls="", marker=_MARKERS.get(s, "^"), ms=8, mfc="0.3", mec="0.3",

@@ -1,7 +1,8 @@
 """Temporal stability: do line samples flicker less than point samples in animation?
 
 Loos & Sloan 2010 (Sec. 5.1) report that line sampling aliases much less than point sampling
-when the camera moves. One PNG, ``temporal_stability.png``, and its numbers, ``temporal_stability.csv``: over a camera orbit (10 degrees,
+when the camera moves. One PNG, ``temporal_stability.png``, and its numbers,
+``temporal_stability.csv``: over a camera orbit (10 degrees,
 ``frames`` frames) of the Cornell box and the blob, the flicker of lines 5 and 9, points 12
 and 33 and one area sample (:func:`vobscure.metrics.flicker`: the mean absolute
 frame-to-frame change of the estimate minus that of the converged screen-space VO over the
