@@ -1,10 +1,10 @@
 """Loos & Sloan 2010, Fig. 5: the thickness model off and on at silhouettes.
 
 One PNG, ``fig5_thickness.png``, and the numbers it plots, ``fig5_thickness.csv``. The scene
-is the Cornell box through its own camera (256 x 256; 48 x 48 with ``quick``), the ball
+is the Cornell box through its own camera (256 x 256; 48 x 48 quick), the ball
 radius R = 0.1 x the scene's extent, seed 0; the G-buffer and the ground truth are those of
 :func:`vobscure.experiments.claims.measurement` (so the numbers agree with
-``docs/results.md``, and a process that also draws Fig. 6 or Fig. 7 computes them once).
+``docs/results.md``, and a process that also draws Fig. 6 or Fig. 7 measures them once).
 
 (a) Visibility, half-ball (``normal_clamp=True``, where the silhouettes are the main error):
     ``vo_line`` (9 lines) and ``vo_area`` (1 area sample) without the thickness model and

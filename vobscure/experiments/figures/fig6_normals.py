@@ -2,7 +2,7 @@
 
 One PNG, ``fig6_normals.png``, and the numbers it plots, ``fig6_normals.csv``. Both scenes of
 :data:`vobscure.experiments.claims.SCENES` (the Cornell box and the blob) through their own
-cameras (256 x 256; 48 x 48 with ``quick``), ball radius R = 0.1 x the scene's extent,
+cameras (256 x 256; 48 x 48 quick), ball radius R = 0.1 x the scene's extent,
 seed 0. Estimates, ground truths and ray-cast AO are those of
 :func:`vobscure.experiments.claims.measurement`, so the raw numbers agree with the tables of
 ``docs/results.md`` and a process that also draws Fig. 5 or Fig. 7 computes them once.

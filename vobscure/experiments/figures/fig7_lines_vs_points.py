@@ -2,7 +2,7 @@
 
 One PNG, ``fig7_lines_vs_points.png``, and the numbers it plots, ``fig7_lines_vs_points.csv``.
 Both scenes of :data:`vobscure.experiments.claims.SCENES` through their own cameras
-(256 x 256; 48 x 48 with ``quick``), ball radius R = 0.1 x the scene's extent, seed 0. The
+(256 x 256; 48 x 48 quick), ball radius R = 0.1 x the scene's extent, seed 0. The
 converged screen-space VO (:func:`vobscure.vo_reference`) and the Embree ground truth are
 those of :func:`vobscure.experiments.claims.measurement` (shared with Fig. 5, Fig. 6 and
 :mod:`~vobscure.experiments.figures.screenspace_claims` within one process).
