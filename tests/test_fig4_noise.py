@@ -21,15 +21,26 @@ BORDER_PIXELS = 2
 Z_SEEDS = 4.0
 #: Relative tolerance of a CSV cell (6 significant digits) against the value it was written from.
 CSV_RTOL = 1e-5
+#: Seeds per random / Sobol' pattern in the quick profile (its docstring's number).
+QUICK_SEEDS = 4
+#: Range of each numeric CSV column: RMSEs of visibilities lie in [0, 1], biases in [-1, 1].
+CSV_RANGES = {"samples": (1, 64), "normal_clamp": (0, 1), "seeds": (1, 1000), "width": (1, 8192),
+              "height": (1, 8192), "ref_samples": (2, 10 ** 6), "rmse_ref": (0.0, 1.0),
+              "rmse_ref_se": (0.0, 1.0), "rmse_ref_sd": (0.0, 1.0), "rmse_ref_first": (0.0, 1.0),
+              "bias_ref": (-1.0, 1.0), "rmse_limit": (0.0, 1.0), "rmse_limit_se": (0.0, 1.0),
+              "limit_rmse_ref": (0.0, 1.0), "ref_noise": (0.0, 1.0), "target": (0.0, 10.0),
+              "ratio": (0.0, 100.0), "ratio_se": (0.0, 100.0), "z": (-1e4, 1e4),
+              "ratio_limit": (0.0, 100.0), "ratio_limit_se": (0.0, 100.0), "pixels": (1, 10 ** 8)}
 
 
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
+    from vobscure.experiments import figures
     from vobscure.experiments.figures import fig4_noise as F
 
     out_dir = tmp_path_factory.mktemp("fig4")
-    paths = F.make(out_dir, quick=True)
-    rows = F.measure(True)           # the same rows (the references are cached per process)
+    paths = figures.make("fig4_noise", out_dir, figures.Profile(quick=True))
+    rows = F.measure(figures.Profile(quick=True))       # measured again: deterministic by the seed
     return F, out_dir, paths, rows
 
 
@@ -59,10 +70,12 @@ def test_quick_make_writes_png_and_csv(quick):
     import matplotlib.image as mpimg
 
     F, out_dir, paths, _ = quick
-    assert paths == [out_dir / F.FILENAME, out_dir / F.CSV_FILENAME]
+    names = ["fig4_noise.csv", "fig4_noise.npz", "fig4_noise.md", "fig4_noise.png"]
+    assert paths == [out_dir / n for n in names]
     # atomic writes: exactly these files, no temporary ones
-    assert sorted(p.name for p in out_dir.iterdir()) == sorted([F.FILENAME, F.CSV_FILENAME])
-    png = paths[0]
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(names)
+    assert "### The goal (lines 9, symmetric, half-ball)" in (out_dir / "fig4_noise.md").read_text()
+    png = out_dir / "fig4_noise.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     rgb = mpimg.imread(png)[..., :3]
     assert rgb.shape[0] >= 600 and rgb.shape[1] >= 600 and rgb.std() > 0.05
@@ -73,17 +86,17 @@ def test_quick_make_writes_png_and_csv(quick):
 
 
 def test_csv_columns_rows_and_ranges(quick):
-    F, _, paths, rows = quick
-    table = _csv(paths[1])
+    F, out_dir, paths, rows = quick
+    table = _csv(out_dir / "fig4_noise.csv")
     assert tuple(table[0]) == F._COLUMNS
-    for column in F.CSV_RANGES:
+    for column in CSV_RANGES:
         assert column in table[0]
     # every configuration once: lines 3 variants x 2 counts, points 2 x 2; 2 normal settings; 3 methods
     assert len(table) == len(rows) == (3 * 2 + 2 * 2) * 2 * len(F.METHODS)
     keys = {(r["estimator"], r["normal_clamp"], r["variant"], r["method"], r["samples"]) for r in table}
     assert len(keys) == len(table)
     for i, r in enumerate(table):
-        for column, (lo, hi) in F.CSV_RANGES.items():
+        for column, (lo, hi) in CSV_RANGES.items():
             if r[column] == "":
                 continue
             value = float(r[column])
@@ -93,7 +106,7 @@ def test_csv_columns_rows_and_ranges(quick):
             assert r["seeds"] == "1" and r["rmse_ref_se"] == "" and r["verdict"] == ""
             assert float(r["rmse_ref"]) == float(r["rmse_ref_first"])
         else:
-            assert int(r["seeds"]) == F.SEEDS[True]
+            assert int(r["seeds"]) == QUICK_SEEDS
             assert r["verdict"] in ("met", "not met", "undecided")
             assert float(r["target"]) == F.GOAL[r["method"]]
     # the CSV holds the rows measure() returns
@@ -127,7 +140,7 @@ def test_random_row_is_the_mean_over_seeds_with_its_standard_error(quick, scene_
 
     F, _, _, rows = quick
     gb, radius, ref = scene_setup
-    k = F.SEEDS[True]
+    k = QUICK_SEEDS
     rmse = [vo.error(vo.vo_line(gb, radius=radius, samples=P.disk(9, method="random", seed=s),
                                 normal_clamp=True, randomize=False), ref).rmse for s in range(k)]
     row = _row(rows, estimator="line", normal_clamp=True, variant="symmetric", method="random", samples=9)
@@ -155,7 +168,9 @@ def test_reported_standard_error_describes_other_seeds(scene_setup):
 
     gb, radius, ref = scene_setup
     k = 8
-    rows = F.measure(True, seeds=k, line_counts=(9,), point_counts=())
+    from vobscure.experiments.figures import Profile
+
+    rows = F.measure(Profile(quick=True), seeds=k, line_counts=(9,), point_counts=())
     assert {r["estimator"] for r in rows} == {"line"}
     for method in ("random", "sobol"):
         row = _row(rows, estimator="line", normal_clamp=True, variant="symmetric", method=method, samples=9)
@@ -190,11 +205,11 @@ def test_goal_arithmetic_and_verdicts(quick):
 def test_registered_and_quick_mode_generates_no_electrostatic_pattern(monkeypatch, tmp_path):
     """Registered before fig5; every electrostatic pattern (quick and full) comes from a table."""
     from vobscure import patterns as P
-    from vobscure.experiments.figures import FIGURES, __all__ as names
     from vobscure.experiments.figures import fig4_noise as F
+    from vobscure.experiments.figures import names
 
-    order = list(FIGURES)
-    assert "fig4_noise" in names and "patterns_quality" in names and "patterns_quality" in FIGURES
+    order = names()
+    assert "fig4_noise" in order and "patterns_quality" in order
     assert order.index("fig4_noise") < order.index("fig5_thickness")
 
     from vobscure.patterns import generators
@@ -206,8 +221,8 @@ def test_registered_and_quick_mode_generates_no_electrostatic_pattern(monkeypatc
         return real(dim, n, method, *args, **kwargs)
 
     monkeypatch.setattr(generators, "generate", no_electrostatic)   # what disk/ball and the tables call
-    for estimator, counts in (("line", F.LINE_COUNTS[True] + F.LINE_COUNTS[False]),
-                              ("point", F.POINT_COUNTS[True] + F.POINT_COUNTS[False])):
+    for estimator, counts in (("line", F.PAPER_COUNTS["line"] + F.LINE_COUNTS),
+                              ("point", F.PAPER_COUNTS["point"] + F.POINT_COUNTS)):
         for variant in F.VARIANTS[estimator]:
             for n in counts:
                 p = F._pattern(estimator, n, "electrostatic", variant, seed=3)

@@ -22,10 +22,12 @@ CSV_RELATIVE_TOLERANCE = 1e-5
 @pytest.fixture(scope="module")
 def table(tmp_path_factory):
     """The quick table's CSV rows, grouped: {(source, row): {column: csv row}}."""
+    from vobscure.experiments import figures
+
     out_dir = tmp_path_factory.mktemp("table1")
-    paths = T.make(out_dir, quick=True)
-    assert [p.name for p in paths] == [T.FILENAME, T.CSV_FILENAME]
-    with open(out_dir / T.CSV_FILENAME, newline="", encoding="utf-8") as fh:
+    paths = figures.make("table1_timings", out_dir, figures.Profile(quick=True))
+    assert [p.name for p in paths] == ["table1_timings.csv", "table1_timings.npz", "table1_timings.png"]
+    with open(out_dir / "table1_timings.csv", newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     grouped = {}
     for r in rows:
@@ -38,10 +40,20 @@ def _ours(table, *, dual):
             if source == "vobscure" and (row.endswith("(dual radii)") == dual)}
 
 
-def test_horizon_columns_sit_beside_the_papers_hsao():
-    assert T.HORIZON_COLUMNS == ("hbao 8x4", "gtao 3x3")
-    i = T.COLUMNS.index("HSAO")
-    assert T.COLUMNS[i + 1:i + 3] == T.HORIZON_COLUMNS
+def test_rows_of_a_hand_made_timing():
+    """Hand-made times of one scene (seconds): the rows hold them in ms, in the table's column
+    order, each over the row's points 12 (2 ms), and the paper's cells before them."""
+    ours = {"blob": {"lines 5": 0.001, "points 12": 0.002, "gtao 3x3": 0.005, "G-buffer": 0.004},
+            "blob (dual radii)": {"points 12": 0.003}}
+    rows = [r for r in T._csv_rows(ours, (8, 6)) if r["source"] == "vobscure"]
+    assert [(r["row"], r["column"], r["ms"], r["baseline_ms"], r["ratio"]) for r in rows] == [
+        ("blob", "G-buffer", 4.0, 2.0, 2.0), ("blob", "lines 5", 1.0, 2.0, 0.5),
+        ("blob", "points 12", 2.0, 2.0, 1.0), ("blob", "gtao 3x3", 5.0, 2.0, 2.5),
+        ("blob (dual radii)", "points 12", 3.0, 2.0, 1.5)]
+    assert all((r["width"], r["height"]) == (8, 6) for r in rows)
+    paper = [r for r in T._csv_rows(ours, (8, 6)) if r["source"] == "paper"]
+    # 6 rows of the paper's Table 1: 6 + 5 + 6 + 6 + 6 + 5 filled cells, and the blur's
+    assert len(paper) == 35 and ("Average", "blur", 2.23) in {(r["row"], r["column"], r["ms"]) for r in paper}
 
 
 def test_every_single_radius_row_has_the_horizon_columns(table):

@@ -255,11 +255,11 @@ def test_poisson_gbuffer_is_poisson_visibility_at_the_pixels():
 def test_canopy_models_figure_quick(tmp_path, poisson_rows):
     import csv
 
-    from vobscure.experiments.figures import FIGURES, canopy_models
+    from vobscure.experiments import figures
 
-    assert FIGURES["canopy_models"] == "canopy_models"
-    paths = canopy_models.make(tmp_path, quick=True, seed=SEED, rows=poisson_rows)
-    assert [p.name for p in paths] == [canopy_models.FILENAME, canopy_models.CSV_FILENAME]
-    assert paths[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    with open(paths[1], newline="", encoding="utf-8") as fh:
+    assert "canopy_models" in figures.names()
+    paths = figures.make("canopy_models", tmp_path, figures.Profile(quick=True, seed=SEED))
+    assert [p.name for p in paths] == ["canopy_models.csv", "canopy_models.npz", "canopy_models.png"]
+    assert paths[2].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with open(paths[0], newline="", encoding="utf-8") as fh:
         assert len(list(csv.DictReader(fh))) == len(poisson_rows)

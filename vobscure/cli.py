@@ -114,10 +114,13 @@ def _parser() -> argparse.ArgumentParser:
     _frame_options(frame, lens_required=False)
 
     f = sub.add_parser("figures", help="regenerate the paper figures",
-                       description="Regenerate figures (one module each in vobscure.experiments.figures).")
+                       description="Regenerate figures (one module each in vobscure.experiments.figures): "
+                                   "measure, write NAME.csv, draw NAME.png.")
     f.add_argument("names", nargs="*", default=["all"], metavar="NAME", help="figure names or 'all' (default)")
     f.add_argument("--quick", action="store_true", help="small and fast versions (what CI runs)")
     f.add_argument("--out", type=Path, default=Path("vobscure-out") / "figures", help="output folder")
+    f.add_argument("--from-csv", action="store_true",
+                   help="draw again from the NAME.csv (and NAME.npz) in --out, measuring nothing")
     f.add_argument("--list", action="store_true", help="list the figure names and exit")
     return p
 
@@ -169,16 +172,19 @@ def _compare_main(args) -> int:
 def _figures_main(args) -> int:
     from .experiments import figures
 
+    known = figures.names()
     if args.list:
-        for name in figures.FIGURES:
+        for name in known:
             print(name)
         return 0
-    names = None if args.names in ([], ["all"]) else args.names
-    unknown = [n for n in (names or []) if n not in figures.FIGURES]
+    names = known if args.names in ([], ["all"]) else args.names
+    unknown = [n for n in names if n not in known]
     if unknown:
-        raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of "
-                         f"{', '.join(figures.FIGURES)}")
-    paths = figures.make_all(args.out, quick=args.quick, names=names, progress=True)
+        raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of {', '.join(known)}")
+    if args.from_csv:
+        paths = figures.replot(names, args.out)
+    else:
+        paths = figures.make(names, args.out, figures.Profile(quick=args.quick), progress=True)
     for path in paths:
         print(f"wrote {path}")
     return 0

@@ -42,7 +42,6 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 from scipy import ndimage
@@ -195,7 +194,7 @@ def _width(size) -> int:
 # ----------------------------------------------------------------------------- measurement
 @dataclass(frozen=True)
 class Measurement:
-    """Everything one :func:`line_vs_point` run computed (cached; treat as read-only)."""
+    """Everything one :func:`line_vs_point` run computed (treat as read-only)."""
 
     scene: object
     gb: object
@@ -247,7 +246,6 @@ def sweep_configs(scene_name: str, *, size=(256, 256), radius=None, seed=0, rays
     return out
 
 
-@lru_cache(maxsize=4)
 def _measure(scene_name: str, size: tuple, radius, seed: int, rays: int, quick: bool,
              supplementary: bool) -> Measurement:
     from ..metrics import error
@@ -321,13 +319,24 @@ def _check_args(scene_name, size, radius, seed, rays):
     return scene_name, size, radius, seed, rays
 
 
+def _measured(measured, scene_name, size, radius, seed, rays, quick) -> Measurement:
+    """``measured`` when given (checked to be of ``scene_name``), else :func:`measurement`."""
+    if measured is None:
+        return measurement(scene_name, size=size, radius=radius, seed=seed, rays=rays, quick=quick)
+    if not isinstance(measured, Measurement) or measured.settings["scene"] != scene_name:
+        raise ValueError(f"measured must be the Measurement of {scene_name!r} "
+                         f"(vobscure.experiments.claims.measurement), got {measured!r:.80}")
+    return measured
+
+
 def measurement(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256, quick=False,
                 supplementary=True) -> Measurement:
-    """The cached run behind :func:`line_vs_point`: G-buffer, estimates, references, rows.
+    """The run behind :func:`line_vs_point`: G-buffer, estimates, references, rows.
 
-    Same arguments as :func:`line_vs_point`. ``images[(label, normal_clamp)]`` holds each
-    configuration's (H, W) estimate at ``seed``, ``reference[normal_clamp]`` the converged
-    screen-space VO, ``truth[normal_clamp]`` the ground-truth :class:`~vobscure.Estimate`,
+    Same arguments as :func:`line_vs_point`; measured at each call (pass the result on, as
+    ``measured=`` of :func:`thickness_at_silhouettes` and :func:`normals_on_off`, to share it).
+    ``images[(label, normal_clamp)]`` holds each configuration's (H, W) estimate at ``seed``,
+    ``reference[normal_clamp]`` the converged screen-space VO, ``truth[normal_clamp]`` the ground-truth :class:`~vobscure.Estimate`,
     ``ao`` the ray-cast AO within the radius. The figure module draws from it.
     """
     scene_name, size, radius, seed, rays = _check_args(scene_name, size, radius, seed, rays)
@@ -383,9 +392,9 @@ def line_vs_point(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256,
 
     Notes
     -----
-    Results are cached per argument set within the process, so that the figure
-    (:mod:`vobscure.experiments.figures.screenspace_claims`) and the tables of one run show
-    the same measurements; the returned dicts are copies.
+    The rows of :func:`measurement` (``[dict(r) for r in measurement(...).rows]``): a caller that
+    also needs the images, or the tables of :func:`thickness_at_silhouettes` and
+    :func:`normals_on_off`, measures once with :func:`measurement` and passes it on.
 
     References
     ----------
@@ -467,12 +476,12 @@ def claims(rows) -> list[dict]:
 # ----------------------------------------------------------------------------- Fig. 5
 def thickness_at_silhouettes(scene_name="cornell_box", *, size=(256, 256), radius=None, seed=0,
                              rays=256, quick=False, samples=9,
-                             factors=THICKNESS_FACTORS) -> list[dict]:
+                             factors=THICKNESS_FACTORS, measured=None) -> list[dict]:
     """Line sampling with and without the thickness model, at silhouettes and overall (Fig. 5).
 
     ``vo_line(samples=9)`` without ``thickness`` and with ``thickness = f * radius`` for each
     ``f`` in ``factors`` is compared with the ground truth of :func:`line_vs_point` (same
-    arguments, same cache) over three pixel sets: all covered pixels, the silhouette band
+    arguments, or ``measured``) over three pixel sets: all covered pixels, the silhouette band
     (:func:`silhouette_mask`, width 2 pixels at 256) and its far side (the surface behind a
     silhouette, where the paper's "shadowed silhouette edges" are).
 
@@ -480,6 +489,9 @@ def thickness_at_silhouettes(scene_name="cornell_box", *, size=(256, 256), radiu
     Cornell box holds 0.1-thick walls (0.27 radius at the default radius) and 0.6-wide boxes
     (1.6 radius); no single value fits both. :data:`THICKNESS_HEADLINE` = 0.5 radius lies
     between them and is the value we quote; the sweep shows how the answer moves with it.
+
+    ``measured``, a :func:`measurement` of ``scene_name`` already made, is used instead of
+    measuring again (its size, seed and settings then apply).
 
     Returns
     -------
@@ -494,8 +506,8 @@ def thickness_at_silhouettes(scene_name="cornell_box", *, size=(256, 256), radiu
     """
     from ..metrics import error
 
-    scene_name, size, radius, seed, rays = _check_args(scene_name, size, radius, seed, rays)
-    m = _measure(scene_name, size, radius, seed, rays, bool(quick), True)
+    m = _measured(measured, scene_name, size, radius, seed, rays, quick)
+    size, seed = m.settings["size"], m.settings["seed"]
     line = _methods.Config("line", samples)
     band, far = silhouette_mask(m.gb.depth, width=_width(size))
     out = []
@@ -517,7 +529,7 @@ def thickness_at_silhouettes(scene_name="cornell_box", *, size=(256, 256), radiu
 
 # ----------------------------------------------------------------------------- Fig. 6
 def normals_on_off(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256, quick=False,
-                   config="lines 9") -> list[dict]:
+                   config="lines 9", measured=None) -> list[dict]:
     """One configuration with and without the normal, each against its own ground truth (Fig. 6).
 
     Unclamped, the estimate targets the ball's VO, clamped the half-ball's: each is compared
@@ -525,6 +537,8 @@ def normals_on_off(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256
     also measured against one common, normal-aware target, the ray-cast AO within the
     radius: the Pearson correlation of the estimate (and of its ground truth) with it, and
     the contrast (standard deviation over pixels) of estimate and ground truth.
+    ``measured``, a :func:`measurement` of ``scene_name`` already made, is used instead of
+    measuring again.
 
     Returns
     -------
@@ -536,8 +550,7 @@ def normals_on_off(scene_name, *, size=(256, 256), radius=None, seed=0, rays=256
     ----------
     Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.4 and Fig. 6.
     """
-    scene_name, size, radius, seed, rays = _check_args(scene_name, size, radius, seed, rays)
-    m = _measure(scene_name, size, radius, seed, rays, bool(quick), True)
+    m = _measured(measured, scene_name, size, radius, seed, rays, quick)
     out = []
     for nc in (False, True):
         row = next(r for r in m.rows if r["config"] == config and r["normal_clamp"] == nc)
@@ -652,9 +665,10 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else (256, 256))
     kw = {"size": size, "seed": args.seed, "quick": args.quick}
-    rows = [r for s in SCENES for r in line_vs_point(s, **kw)]
-    thick = thickness_at_silhouettes("cornell_box", **kw)
-    normals = [n for s in SCENES for n in normals_on_off(s, **kw)]
+    measured = {s: measurement(s, **kw) for s in SCENES}
+    rows = [dict(r) for s in SCENES for r in measured[s].rows]
+    thick = thickness_at_silhouettes("cornell_box", **kw, measured=measured["cornell_box"])
+    normals = [n for s in SCENES for n in normals_on_off(s, **kw, measured=measured[s])]
     given = list(sys.argv[1:] if argv is None else argv)
     command = " ".join(["python -m vobscure.experiments.claims"] + given)
     print(markdown(rows, claims(rows), thick, normals, command=command))

@@ -1,72 +1,228 @@
-"""What the figure modules share beyond :mod:`vobscure.experiments.common`: the image panels,
-the figures' sizes, the writing of a figure with its CSV, and the ``python -m`` main of a
-measured figure.
+"""What the figure modules share: the :class:`Profile` they are measured at, the
+:class:`Rows` they measure, the files those are written to and read back from, the claims'
+measurement that several figures draw, and the image panels.
 
 The writers, the timer, the default radius and the machine record are those of
 :mod:`vobscure.experiments.common` (one copy for every experiment); this module holds what
-only figures need. Not a figure itself (it is not in
-:data:`vobscure.experiments.figures.FIGURES`).
+only figures need. Its name starts with an underscore, so the figure discovery of
+:mod:`vobscure.experiments.figures` skips it.
 """
 
 from __future__ import annotations
 
+import csv
+import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..common import save_figure, write_csv
+from ..common import write_csv
 
-__all__ = ["BACKGROUND", "FULL_SIZE", "CSV_DIGITS", "SCENE_NAMES", "size_for", "measurements",
-           "write_figure",
-           "image_panel", "error_panel", "corr", "fmt", "table_main"]
+__all__ = ["BACKGROUND", "FULL_SIZE", "QUICK_SIZE", "CSV_DIGITS", "SCENE_NAMES", "Profile", "Rows",
+           "write_rows", "read_rows", "claims_measurements", "compare_rows", "per_scene", "image_panel",
+           "error_panel", "pixel_rmse", "log_log", "corr", "fmt"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
-#: Image size (width, height) of a figure of the paper's scenes, without ``quick``.
+#: Image size (width, height) of a figure of the paper's scenes in the full profile.
 FULL_SIZE = (256, 256)
+#: The same in the quick profile: the size of the claims' quick measurements, which
+#: Figs. 5-7 share (:data:`vobscure.experiments.claims.QUICK_SIZE`).
+QUICK_SIZE = (48, 48)
 #: Significant digits of the floats in a figure's CSV.
 CSV_DIGITS = 6
 #: How a figure names a scene of :mod:`vobscure.scenes` in titles and tick labels.
 SCENE_NAMES = {"cornell_box": "Cornell box", "blob": "blob"}
 
 
-def size_for(quick: bool, size=None, *, full=FULL_SIZE) -> tuple:
-    """The image size (width, height) of a figure: ``size`` when given, else ``full`` or, with
-    ``quick``, :data:`vobscure.experiments.claims.QUICK_SIZE` (48 x 48: the size of the
-    claims' quick measurements, which Figs. 5-7 share)."""
-    if size is not None:
-        return tuple(size)
-    if quick:
-        from ..claims import QUICK_SIZE
+@dataclass(frozen=True)
+class Profile:
+    """How much a figure measures: the quick profile (what CI runs, seconds per figure) or the
+    full one (the figures of the docs), the seed, and the image size of the paper's scenes.
 
-        return tuple(QUICK_SIZE)
-    return tuple(full)
+    A figure reads the fields it needs; a number of its own that differs between the two
+    profiles is written once as ``profile.pick(quick_value, full_value)``.
+
+    Parameters
+    ----------
+    quick : bool, optional
+        Small images, few samples and seeds.
+    seed : int, optional
+        Seed of every figure's noise and references (a figure may derive ``seed + k``).
+    size : (int, int), optional
+        Image (width, height) of the paper's scenes; default :data:`QUICK_SIZE` (48 x 48) or
+        :data:`FULL_SIZE` (256 x 256). Figures of other scenes keep their own sizes.
+
+    Examples
+    --------
+    >>> p = Profile(quick=True)
+    >>> p.name, p.size, p.pick(64, 1024)
+    ('quick', (48, 48), 64)
+    >>> Profile().pick(64, 1024), Profile(size=(32, 24)).size
+    (1024, (32, 24))
+    >>> Profile(seed=-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: seed must be an integer >= 0, got -1
+    """
+
+    quick: bool = False
+    seed: int = 0
+    size: tuple | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.quick, (bool, np.bool_)):
+            raise ValueError(f"quick must be True or False, got {self.quick!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+        size = self.pick(QUICK_SIZE, FULL_SIZE) if self.size is None else tuple(self.size)
+        if len(size) != 2 or not all(isinstance(s, (int, np.integer)) and s > 0 for s in size):
+            raise ValueError(f"size must be (width, height), two positive integers, got {self.size!r}")
+        object.__setattr__(self, "quick", bool(self.quick))
+        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "size", tuple(int(s) for s in size))
+
+    @property
+    def name(self) -> str:
+        """``"quick"`` or ``"full"``."""
+        return "quick" if self.quick else "full"
+
+    def pick(self, quick, full):
+        """``quick`` in the quick profile, else ``full``."""
+        return quick if self.quick else full
 
 
-def measurements(size, seed: int, quick: bool) -> dict:
-    """:func:`vobscure.experiments.claims.measurement` of every scene of
-    :data:`~vobscure.experiments.claims.SCENES`, by scene name (cached per process)."""
-    from .. import claims
+class Rows(list):
+    """What a figure's ``measure`` returns: its rows (dicts, written as the figure's CSV) and,
+    beside them, what the CSV cannot hold.
 
-    return {scene: claims.measurement(scene, size=size, seed=seed, quick=quick) for scene in claims.SCENES}
+    Parameters
+    ----------
+    rows : iterable of dict
+        The CSV's rows; a key a row lacks is an empty cell.
+    columns : sequence of str, optional
+        The CSV's columns, in order; default every key, in order of first appearance. Keys
+        outside ``columns`` are not written, so ``plot`` must not read them.
+    arrays : dict of str to ndarray, optional
+        Images and curves (numeric arrays), written beside the CSV as ``<name>.npz``.
+    meta : dict, optional
+        Scalars, strings and lists for titles (JSON), written into the same ``.npz``.
+    digits : int or None, optional
+        Significant digits of the CSV's floats; default :data:`CSV_DIGITS`; None: exact.
+
+    Examples
+    --------
+    >>> r = Rows([{"n": 1, "rmse": 0.5}], arrays={"image": np.zeros((2, 2))}, meta={"seed": 0})
+    >>> len(r), r[0]["rmse"], r.columns, r.arrays["image"].shape, r.meta
+    (1, 0.5, ('n', 'rmse'), (2, 2), {'seed': 0})
+    """
+
+    def __init__(self, rows=(), *, columns=None, arrays=None, meta=None, digits: int | None = CSV_DIGITS):
+        super().__init__(dict(r) for r in rows)
+        if columns is None:
+            columns = []
+            for row in self:
+                columns.extend(k for k in row if k not in columns)
+        self.columns = tuple(columns)
+        self.arrays = {k: np.asarray(v) for k, v in (arrays or {}).items()}
+        self.meta = dict(meta or {})
+        self.digits = digits
 
 
-def write_figure(fig, out_dir, filename: str, rows=None, csv_filename: str | None = None,
-                 columns=None) -> list[Path]:
-    """Write ``fig`` as ``out_dir / filename`` (PNG) and, when ``rows`` are given, the rows as
-    ``out_dir / csv_filename`` with ``columns`` (floats to :data:`CSV_DIGITS` significant
-    digits, booleans 0 / 1, None empty); both atomically, ``out_dir`` created if missing.
+def _parse_cell(text: str):
+    """A CSV cell read back: empty -> None, an integer -> int, a number -> float, else the text
+    (booleans were written as 0 / 1 and come back as those ints)."""
+    if text == "":
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def write_rows(rows: Rows, csv_path, npz_path=None) -> list[Path]:
+    """Write ``rows`` as CSV (floats to ``rows.digits`` significant digits, booleans 0 / 1,
+    None empty) and, when they carry arrays or meta, those as ``npz_path``; atomically.
 
     Returns
     -------
     list of Path
-        ``[png]`` or ``[png, csv]``.
+        ``[csv]`` or ``[csv, npz]``.
     """
-    out_dir = Path(out_dir)
-    paths = [save_figure(fig, out_dir / filename)]
-    if rows is not None:
-        paths.append(write_csv(out_dir / csv_filename, rows, columns, digits=CSV_DIGITS))
+    from ..._io import atomic_write
+
+    paths = [write_csv(csv_path, rows, rows.columns, digits=rows.digits)]
+    if npz_path is not None and (rows.arrays or rows.meta):
+        payload = dict(rows.arrays, __meta__=np.array(json.dumps(rows.meta, sort_keys=True)))
+        paths.append(atomic_write(Path(npz_path), lambda fh: np.savez_compressed(fh, **payload)))
     return paths
+
+
+def read_rows(csv_path, npz_path=None) -> Rows:
+    """The :class:`Rows` that :func:`write_rows` wrote: cells typed back (see
+    :func:`_parse_cell`), floats as rounded in the file, arrays and meta from ``npz_path``
+    when it exists.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     rows = Rows([{"a": 1, "b": True, "c": None, "d": 1 / 3, "e": "lines 9"}],
+    ...                 arrays={"x": np.arange(3.0)}, meta={"seed": 7})
+    ...     _ = write_rows(rows, f"{tmp}/f.csv", f"{tmp}/f.npz")
+    ...     back = read_rows(f"{tmp}/f.csv", f"{tmp}/f.npz")
+    >>> back[0]
+    {'a': 1, 'b': 1, 'c': None, 'd': 0.333333, 'e': 'lines 9'}
+    >>> back.columns, back.arrays["x"].tolist(), back.meta
+    (('a', 'b', 'c', 'd', 'e'), [0.0, 1.0, 2.0], {'seed': 7})
+    """
+    with open(csv_path, newline="", encoding="utf-8") as fh:
+        reader = csv.reader(fh)
+        columns = next(reader)
+        rows = [{c: _parse_cell(v) for c, v in zip(columns, line)} for line in reader]
+    arrays, meta = {}, {}
+    if npz_path is not None and Path(npz_path).is_file():
+        with np.load(npz_path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files if k != "__meta__"}
+            meta = json.loads(str(data["__meta__"]))
+    return Rows(rows, columns=columns, arrays=arrays, meta=meta)
+
+
+def claims_measurements(profile: Profile) -> dict:
+    """:func:`vobscure.experiments.claims.measurement` of every scene of
+    :data:`~vobscure.experiments.claims.SCENES` at ``profile``, by scene name, measured now.
+
+    Figures that draw it take it as the keyword ``claims`` of their ``measure``; the driver
+    (:func:`vobscure.experiments.figures.make`) measures it once per run and passes it to each.
+    """
+    from .. import claims
+
+    return {scene: claims.measurement(scene, size=profile.size, seed=profile.seed, quick=profile.quick)
+            for scene in claims.SCENES}
+
+
+def compare_rows(scenes, columns, *, extra=None, **options) -> Rows:
+    """The rows of :func:`vobscure.experiments.compare.compare` (``options``; no progress, no
+    files) for each scene, each row with its ``scene`` and the ``extra`` keys, as :class:`Rows`
+    with ``columns``."""
+    from ..compare import compare
+
+    rows = []
+    for scene in scenes:
+        res = compare(scene, progress=False, out=None, plots=False, write=False, **options)
+        rows += [dict(row, scene=scene, **(extra or {})) for row in res.rows]
+    return Rows(rows, columns=columns)
+
+
+def per_scene(rows, scene):
+    """The rows of ``scene``, their labels ("line 5") and bar positions 0, 1, ..."""
+    sel = [r for r in rows if r["scene"] == scene]
+    return sel, [f"{r['method']} {r['samples']}" for r in sel], np.arange(len(sel))
 
 
 def image_panel(ax, image, title=None, *, vmin=0.0, vmax=1.0, cmap="gray", fontsize=9.5):
@@ -89,6 +245,26 @@ def error_panel(ax, estimate, truth, title=None, *, limit=0.5, fontsize=9.5):
     return image_panel(ax, diff, title, vmin=-limit, vmax=limit, cmap="RdBu", fontsize=fontsize)
 
 
+def pixel_rmse(model, truth) -> float:
+    """RMSE over the pixels finite in both images; NaN if none."""
+    model, truth = np.asarray(model, dtype=np.float64), np.asarray(truth, dtype=np.float64)
+    ok = np.isfinite(truth) & np.isfinite(model)
+    return float(np.sqrt(np.mean((model[ok] - truth[ok]) ** 2))) if ok.any() else float("nan")
+
+
+def log_log(ax) -> None:
+    """Both axes of ``ax`` logarithmic, ticks at 1, 2, 5 x 10^k labelled plainly, a light grid."""
+    from matplotlib.ticker import FormatStrFormatter, LogLocator
+
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.set_minor_formatter(FormatStrFormatter(""))
+    ax.grid(True, which="both", color="0.9", lw=0.6)
+
+
 def corr(a, b, mask=None) -> float:
     """Pearson correlation over pixels finite in both (and in ``mask``); NaN if undefined."""
     a = np.asarray(a, dtype=np.float64)
@@ -104,21 +280,3 @@ def corr(a, b, mask=None) -> float:
 def fmt(x, digits: int = 3) -> str:
     """A float for a title or table cell: fixed ``digits``, "nan" when not finite."""
     return "nan" if x is None or not np.isfinite(x) else f"{x:.{digits}f}"
-
-
-def table_main(module: str, measure, make, markdown, argv=None) -> int:
-    """``python -m <module> [--quick] [--out DIR] [--seed N]``: measure once, draw the figure
-    from those rows (``make(..., rows=rows)``) and print them as ``markdown(rows)``."""
-    import argparse
-
-    ap = argparse.ArgumentParser(prog=f"python -m {module}")
-    ap.add_argument("--quick", action="store_true", help="small and fast")
-    ap.add_argument("--out", default=".", help="directory of the PNG and CSV")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
-    rows = measure(args.quick, seed=args.seed)
-    paths = make(args.out, quick=args.quick, seed=args.seed, rows=rows)
-    print(markdown(rows))
-    for path in paths:
-        print(f"wrote {path}")
-    return 0

@@ -14,8 +14,7 @@ One PNG, ``canopy_models.png``, and the numbers behind it, ``canopy_models.csv``
     (same leaf count, leaf size and shell: the Poisson model's own error without clustering);
     black ticks: the ground truth's own standard error.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import canopy_models as f;
-f.make('docs/img')"`` (``quick=True`` in seconds).
+Regenerate with ``vobscure figures canopy_models --out docs/img`` (``--quick`` in seconds).
 
 References
 ----------
@@ -25,93 +24,67 @@ I3D 2006, Sec. 3 (Eqs. 4-8, the Poisson argument).
 
 from __future__ import annotations
 
-from pathlib import Path
+from ._common import Rows
 
-import numpy as np
+__all__ = ["measure", "plot", "SCENES"]
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "SCENES"]
+ORDER = 170
+FIGSIZE = (16.0, 19.0)
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "canopy_models.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "canopy_models.csv"
 #: The scenes of panel (a): (registered name, label).
 SCENES = (("leaf_cloud", "sparse leaf cloud"), ("leaf_cloud_dense", "dense leaf cloud"),
           ("tree", "apple-like tree"), ("tree_poplar", "poplar-like tree"))
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"parameter": (0.0, 1e4), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0), "corr": (-1.0, 1.0),
-              "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0), "truth_stderr": (0.0, 0.5),
-              "points": (1, 10 ** 6), "truth_rays": (2, 10 ** 5)}
 
 _COLORS = {"hegeman fitted": "#1f77b4", "poisson predicted": "#d62728"}
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``canopy_models.png`` and write ``canopy_models.csv``.
-
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Few points, rays and pixels (seconds), for CI.
-    seed : int, optional
-        Seed of the points and of the ground truth.
-    rows : list of dict, optional
-        Rows of :func:`vobscure.experiments.trees.poisson_rows` already measured (the same
-        ``quick`` and ``seed``); measured when omitted.
-
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import canopy_models
-    >>> canopy_models.FILENAME
-    'canopy_models.png'
-    """
+def measure(profile) -> Rows:
+    """The rows of :func:`vobscure.experiments.trees.poisson_rows` and the per-pixel images of
+    panel (a) (:func:`~vobscure.experiments.trees.poisson_images`, bounding sphere, cosine
+    reference); quick: few points, rays and pixels."""
     from .. import trees as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
-    if rows is None:
-        rows = X.poisson_rows(quick, seed=seed)
-    fig = new_figure(16.0, 19.0)
+    quick, seed = profile.quick, profile.seed
+    rows = X.poisson_rows(quick, seed=seed)
+    arrays, meta = {}, {"seed": seed, "quick": quick, **X.setting(quick), "pixels": dict(X.POISSON_PIXELS[quick]),
+                        "images": {}}
+    for name, _ in SCENES:
+        im = X.poisson_images(name, shell="sphere", reference="cosine", quick=quick, seed=seed)
+        for key in ("truth", "hegeman", "poisson"):
+            arrays[f"{name}|{key}"] = im[key]
+        meta["images"][name] = {"rays": im["rays"], "density": im["density"], "sigma": im["sigma"]}
+    return Rows(rows, columns=X.POISSON_COLUMNS, arrays=arrays, meta=meta)
+
+
+def plot(rows, fig) -> None:
+    """(a) per pixel, (b)-(c) RMSE per scene and shell."""
+    s = rows.meta
     top, bottom = fig.subfigures(2, 1, height_ratios=[1.55, 1.0], hspace=0.03)
-    _images(top, quick, seed)
+    _images(top, rows)
     _bars(bottom, rows)
-    s = X.setting(quick)
-    px = X.POISSON_PIXELS[quick]
+    px = s["pixels"]
     fig.suptitle(f"Canopy models: Eq. 6 with a fitted density against the Poisson leaf cloud, nothing "
                  f"fitted ({s['points']} leaf points per scene, {s['truth_rays']} rays; pixels "
-                 f"{px['size'][0]}x{px['size'][1]}, {px['rays']} rays; seed {seed}{', quick' if quick else ''})",
-                 fontsize=12.5)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, X.POISSON_COLUMNS)
+                 f"{px['size'][0]}x{px['size'][1]}, {px['rays']} rays; seed {s['seed']}"
+                 f"{', quick' if s['quick'] else ''})", fontsize=12.5)
 
 
-def _images(subfig, quick, seed):
-    from .. import trees as X
-    from ._common import error_panel, image_panel
+def _images(subfig, rows):
+    from ._common import error_panel, image_panel, pixel_rmse
 
     axes = subfig.subplots(len(SCENES), 5)
     err = None
     for i, (name, label) in enumerate(SCENES):
-        im = X.poisson_images(name, shell="sphere", reference="cosine", quick=quick, seed=seed)
+        im = {key: rows.arrays[f"{name}|{key}"] for key in ("truth", "hegeman", "poisson")}
+        im.update(rows.meta["images"][name])
         t = im["truth"]
-        ok = np.isfinite(t)
-
-        def rmse(m):
-            return float(np.sqrt(np.mean((m[ok] - t[ok]) ** 2))) if ok.any() else float("nan")
-
         a = axes[i]
         image_panel(a[0], t, f"{label}\nray cast, cosine ({im['rays']} rays)", fontsize=9)
         image_panel(a[1], im["hegeman"], f"Eq. 6, fitted density {im['density']:.3g}", fontsize=9)
         image_panel(a[2], im["poisson"], f"Poisson, sigma = nA/2 = {im['sigma']:.3g}", fontsize=9)
-        error_panel(a[3], im["hegeman"], t, f"Eq. 6 - ray cast\nRMSE {rmse(im['hegeman']):.3f}", fontsize=9)
-        err = error_panel(a[4], im["poisson"], t, f"Poisson - ray cast\nRMSE {rmse(im['poisson']):.3f}",
+        error_panel(a[3], im["hegeman"], t, f"Eq. 6 - ray cast\nRMSE {pixel_rmse(im['hegeman'], t):.3f}",
+                    fontsize=9)
+        err = error_panel(a[4], im["poisson"], t, f"Poisson - ray cast\nRMSE {pixel_rmse(im['poisson'], t):.3f}",
                           fontsize=9)
     subfig.colorbar(err, ax=axes, shrink=0.6, label="signed difference (right two columns)")
     subfig.suptitle("(a) per pixel, bounding sphere: ground truth, Eq. 6 fitted (Eqs. 7-8 on the ground), "

@@ -1,6 +1,7 @@
 """The conventions figure: spaces, pixels, a real G-buffer and the visibility of the crease.
 
-One PNG, ``conventions.png``, that a new user reads beside ``docs/conventions.md``:
+One PNG, ``conventions.png`` (and the numbers of panel (d), ``conventions.csv``), that a new user
+reads beside ``docs/conventions.md``:
 
 (a) world space (right-handed, y up) and view space (x right, y up, z = depth > 0 in
     front of the camera) in a side view of the camera that renders panel (c);
@@ -11,23 +12,22 @@ One PNG, ``conventions.png``, that a new user reads beside ``docs/conventions.md
 (d) the ball of Volumetric Obscurance around a floor point of the crease and the closed
     forms of DESIGN.md ("Testing"), checked against the ray-cast ground truth.
 
-Regenerate with::
-
-    python -c "from vobscure.experiments.figures import conventions; conventions.make('docs/img')"
+Regenerate with ``vobscure figures conventions --out docs/img``.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
-from ._common import BACKGROUND
+from ._common import BACKGROUND, Rows
 
-__all__ = ["make", "FILENAME", "CAMERA", "RADIUS"]
+__all__ = ["measure", "plot", "CAMERA", "RADIUS"]
 
-#: Name of the one file :func:`make` writes.
-FILENAME = "conventions.png"
+ORDER = 0
+FIGSIZE = (13.0, 13.6)
+DPI = 110
 
 #: The camera of panels (a) and (c): in the plane z = 0, looking at the crease's edge from
 #: the open side, so that the side view (a) is exact. Its ``right`` is world -z.
@@ -36,17 +36,6 @@ CAMERA = {"eye": (7.5, 2.6, 0.0), "target": (1.0, 1.2, 0.0), "up": (0.0, 1.0, 0.
 #: AO radius of panel (c) and ball radius R of panel (d), in the crease's units.
 RADIUS = 1.0
 
-# (full, quick) settings
-_SIZE = {False: (120, 80), True: (60, 40)}
-_AO_RAYS = {False: 64, True: 16}
-_CHECK_RAYS = {False: 1024, True: 64}        # rays per point of the (d) check, cosine AO
-_CHECK_SAMPLES = {False: 4096, True: 256}    # points per ball of the (d) check, VO
-# c > 0: a point exactly on the edge (c = 0) lies on the wall too, where a ray origin offset
-# along the floor normal stays in the wall's plane and every ray is reported blocked.
-_CHECK_C = {False: np.linspace(0.1, 1.0, 7), True: np.array([0.25, 0.6, 1.0])}
-_DPI = 110
-_SEED = 0
-
 _SOLID = "#b8b8b8"          # the crease's solid in the sketches
 _OCCUPIED = "#5a5a5a"       # the occupied part of the ball
 _OPEN = "#cfe3f7"           # the unoccupied part of the ball
@@ -54,68 +43,85 @@ _VIEW = "#d62728"           # view-space axes
 _WORLD = "#1f3f99"          # world-space axes
 
 
-def make(out_dir, quick: bool = False) -> list[Path]:
-    """Draw ``conventions.png``: spaces, pixels, a crease G-buffer and VO visibility.
+def measure(profile) -> Rows:
+    """The crease's G-buffer, its ray-cast AO, and the visibility of floor points at c = a / R.
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Smaller images and fewer rays and samples (a few seconds in all), for CI. The
-        panels are the same; only the Monte Carlo noise and the resolution differ.
+    Quick profile: 60 x 40 pixels, 16 AO rays per pixel, and at c = 0.25, 0.6, 1 64 AO rays
+    and 256 points per ball; full: 120 x 80, 64 rays, c at 7 values in [0.1, 1], 1024 rays and
+    4096 points. Seed ``profile.seed`` (+1, +2 for the half-ball and the AO check).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / "conventions.png"]``. The file is written to a temporary name and
-        renamed into place, so an interrupted run never leaves a truncated PNG.
+    Rows
+        One row per c: ``c``, the ray-cast ``ball``, ``half`` (half-ball) VO and ``ao`` with
+        their ``*_stderr``, and the closed forms ``*_exact`` (see Notes); arrays ``depth``,
+        ``normal``, ``valid`` and ``ao`` (the panel (c) images).
 
     Notes
     -----
     Panel (c) renders ``vo.scenes.crease()`` (floor top y = 0, wall face x = 0) with
     :data:`CAMERA` and computes ``vo.ground_truth(scene, gb, quantity="ao",
-    radius=RADIUS, rays=64)`` (16 with ``quick``), seed 0. Panel (d) evaluates, for a floor
-    point at distance a from the wall and c = a / R, the closed forms of DESIGN.md:
-    ball VO 1/2 - (1 - c)^2 (2 + c) / 8, half-ball VO 1 - (1 - c)^2 (2 + c) / 4 and
-    cosine-weighted AO within R, 1 - (acos c - c sqrt(1 - c^2)) / pi, and plots
-    :func:`vobscure.volumetric_obscurance` and :func:`vobscure.ambient_occlusion` at a few
-    c with error bars of two standard errors.
+    radius=RADIUS)``. Panel (d) evaluates, for a floor point at distance a from the wall and
+    c = a / R, the closed forms of DESIGN.md: ball VO 1/2 - (1 - c)^2 (2 + c) / 8, half-ball
+    VO 1 - (1 - c)^2 (2 + c) / 4 and cosine-weighted AO within R,
+    1 - (acos c - c sqrt(1 - c^2)) / pi, against :func:`vobscure.volumetric_obscurance` and
+    :func:`vobscure.ambient_occlusion` at a few c.
 
     Examples
     --------
-    >>> import tempfile
-    >>> from vobscure.experiments.figures import conventions
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     [p.name for p in conventions.make(tmp, quick=True)]
-    ['conventions.png']
+    The closed forms at c = 1 (a point a radius away from the wall: an open floor) and c = 0:
+
+    >>> {k: float(v) for k, v in _closed_forms(1.0).items()}
+    {'ball': 0.5, 'half': 1.0, 'ao': 1.0}
+    >>> {k: round(float(v), 6) for k, v in _closed_forms(0.0).items()}
+    {'ball': 0.25, 'half': 0.5, 'ao': 0.5}
     """
     from ... import scenes
     from ...camera import Camera
     from ...gbuffer import render_gbuffer
     from ...groundtruth import ground_truth
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
     scene = scenes.crease()
-    cam = Camera.look_at(CAMERA["eye"], CAMERA["target"], CAMERA["up"], size=_SIZE[quick],
+    cam = Camera.look_at(CAMERA["eye"], CAMERA["target"], CAMERA["up"], size=profile.pick((60, 40), (120, 80)),
                          fov_y=CAMERA["fov_y"])
     gb = render_gbuffer(scene, cam)
-    ao = ground_truth(scene, gb, quantity="ao", radius=RADIUS, rays=_AO_RAYS[quick],
-                      seed=_SEED, progress=False)
-    check = _crease_check(scene, quick)
+    ao = ground_truth(scene, gb, quantity="ao", radius=RADIUS, rays=profile.pick(16, 64),
+                      seed=profile.seed, progress=False)
+    check = _crease_check(scene, profile)
+    exact = _closed_forms(check["c"])
+    rows = [{"c": float(c), **{f"{k}{suffix}": float(v) for k in ("ball", "half", "ao")
+                               for suffix, v in (("", getattr(check[k], "value")[i]),
+                                                 ("_stderr", check[k].stderr[i]), ("_exact", exact[k][i]))}}
+            for i, c in enumerate(check["c"])]
+    meta = {"eye": cam.eye[:2].tolist(), "forward": cam.forward[:2].tolist(), "up": cam.up[:2].tolist(),
+            "fov_y": float(cam.fov_y), "floor_normal_view": cam.world_to_view_dir(np.array([0.0, 1.0, 0.0])).tolist(),
+            "bounds": np.asarray(scene.bounds, dtype=np.float64).tolist(), "ao_samples": int(ao.samples),
+            "quick": profile.quick}
+    return Rows(rows, arrays={"depth": gb.depth, "normal": gb.normal, "valid": gb.valid, "ao": ao.value},
+                meta=meta)
 
-    fig = new_figure(13.0, 13.6, dpi=_DPI)
-    rows = fig.subfigures(3, 1, height_ratios=[1.15, 0.8, 1.0], hspace=0.02)
-    top = rows[0].subplots(1, 2, width_ratios=[1.55, 1.0])
-    _panel_spaces(top[0], cam, scene)
+
+def plot(rows, fig) -> None:
+    """Draw panels (a) to (d) from :func:`measure`'s rows."""
+    m, a = rows.meta, rows.arrays
+    cam = SimpleNamespace(eye=np.array(m["eye"]), forward=np.array(m["forward"]), up=np.array(m["up"]),
+                          fov_y=m["fov_y"], floor_normal_view=np.array(m["floor_normal_view"]))
+    bounds = tuple(np.array(b) for b in m["bounds"])
+    gb = SimpleNamespace(depth=a["depth"], normal=a["normal"], valid=a["valid"].astype(bool),
+                         shape=a["depth"].shape)
+    ao = SimpleNamespace(value=a["ao"], samples=m["ao_samples"])
+    check = {"c": np.array([r["c"] for r in rows], dtype=np.float64)}
+    for k in ("ball", "half", "ao"):
+        check[k] = SimpleNamespace(value=np.array([r[k] for r in rows], dtype=np.float64),
+                                   stderr=np.array([r[f"{k}_stderr"] for r in rows], dtype=np.float64))
+    parts = fig.subfigures(3, 1, height_ratios=[1.15, 0.8, 1.0], hspace=0.02)
+    top = parts[0].subplots(1, 2, width_ratios=[1.55, 1.0])
+    _panel_spaces(top[0], cam, bounds)
     _panel_pixels(top[1])
-    _panel_gbuffer(rows[1], gb, ao)
-    bottom = rows[2].subplots(1, 2, width_ratios=[1.0, 1.25])
-    _panel_ball(bottom[0], scene)
-    _panel_closed_forms(bottom[1], check, quick)
-    return write_figure(fig, out_dir, FILENAME)
+    _panel_gbuffer(parts[1], gb, ao)
+    bottom = parts[2].subplots(1, 2, width_ratios=[1.0, 1.25])
+    _panel_ball(bottom[0], bounds)
+    _panel_closed_forms(bottom[1], check, m["quick"])
 
 
 # ----------------------------------------------------------------------------- data
@@ -130,19 +136,22 @@ def _closed_forms(c):
     }
 
 
-def _crease_check(scene, quick):
+def _crease_check(scene, profile):
     """Ray-cast values at floor points (a, 0, 0), a = c R, for panel (d)."""
     from ...groundtruth import ambient_occlusion, volumetric_obscurance
 
-    c = _CHECK_C[quick]
+    # c > 0: a point exactly on the edge (c = 0) lies on the wall too, where a ray origin offset
+    # along the floor normal stays in the wall's plane and every ray is reported blocked.
+    c = profile.pick(np.array([0.25, 0.6, 1.0]), np.linspace(0.1, 1.0, 7))
+    samples = profile.pick(256, 4096)
+    seed = profile.seed
     points = np.stack([c * RADIUS, np.zeros_like(c), np.zeros_like(c)], axis=1)
     normals = np.tile([0.0, 1.0, 0.0], (len(c), 1))
-    ball = volumetric_obscurance(scene, points, radius=RADIUS, samples=_CHECK_SAMPLES[quick],
-                                 seed=_SEED)
+    ball = volumetric_obscurance(scene, points, radius=RADIUS, samples=samples, seed=seed)
     half = volumetric_obscurance(scene, points, normals, radius=RADIUS, normal_clamp=True,
-                                 samples=_CHECK_SAMPLES[quick], seed=_SEED + 1)
-    ao = ambient_occlusion(scene, points, normals, rays=_CHECK_RAYS[quick], max_distance=RADIUS,
-                           seed=_SEED + 2)
+                                 samples=samples, seed=seed + 1)
+    ao = ambient_occlusion(scene, points, normals, rays=profile.pick(64, 1024), max_distance=RADIUS,
+                           seed=seed + 2)
     return {"c": c, "ball": ball, "half": half, "ao": ao}
 
 
@@ -193,11 +202,11 @@ def _equal_aspect(ax, xlim, ylim):
 
 
 # ----------------------------------------------------------------------------- panels
-def _panel_spaces(ax, cam, scene):
+def _panel_spaces(ax, cam, bounds):
     """(a) Side view (the plane z = 0) of the crease, the camera and both frames."""
     from matplotlib.patches import Polygon
 
-    (lo, hi) = scene.bounds  # the crease's profile: x in [-t, L], y in [-t, H]
+    (lo, hi) = bounds  # the crease's profile: x in [-t, L], y in [-t, H]
     profile = _crease_profile(t=-lo[0], L=hi[0], H=hi[1])
     ax.add_patch(Polygon(profile, closed=True, fc=_SOLID, ec="k", lw=1.0, zorder=1))
     ax.text(-1.0, 2.2, "wall\n(face x = 0)", ha="center", va="center", fontsize=9)
@@ -254,8 +263,7 @@ def _panel_spaces(ax, cam, scene):
             va="top")
 
     # the floor normal at P faces the camera: n_z = n . forward < 0
-    n_world = np.array([0.0, 1.0, 0.0])
-    n_view = cam.world_to_view_dir(n_world)
+    n_view = cam.floor_normal_view
     _arrow(ax, P, (0.0, 1.1), "k", lw=1.6)
     ax.text(P[0] + 0.1, P[1] + 0.75, "n", fontsize=10, ha="left", va="center")
     ax.annotate(f"floor normal n = (0, 1, 0) in world space,\n"
@@ -366,14 +374,14 @@ def _panel_gbuffer(subfig, gb, ao):
                     fontsize=11)
 
 
-def _panel_ball(ax, scene):
+def _panel_ball(ax, bounds):
     """(d, left) Cross-section z = 0 of the ball around a floor point at distance a from the wall."""
     from matplotlib.patches import Circle, Polygon
 
     R = RADIUS
     a = 0.4 * R
     P = np.array([a, 0.0])
-    (lo, hi) = scene.bounds
+    (lo, hi) = bounds
     profile = _crease_profile(t=-lo[0], L=hi[0], H=hi[1])
     ax.add_patch(Polygon(profile, closed=True, fc=_SOLID, ec="k", lw=1.0, zorder=1))
     # the ball: its open part, then the solid again, clipped to the ball: the occupied part

@@ -15,8 +15,7 @@ Lower row, grey surfaces of albedo 0.6: the ray-traced visibility with interrefl
 (the reference, ``ambient_occlusion(..., bounces, albedo)``), the error of each correction
 applied to the ray-traced k_A, and the RMSE of each correction per albedo.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import cornell_shading as f;
-f.make('docs/img')"`` (about a minute; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures cornell_shading --out docs/img`` (about a minute; ``--quick`` in seconds).
 
 References
 ----------
@@ -26,26 +25,25 @@ Akenine-Moller, Haines & Hoffman, Real-Time Rendering 3rd ed., Sec. 9.2.1, Eqs. 
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "WALL_COLOURS", "SHOWN_ALBEDO"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "cornell_shading.png"
-#: Name of the CSV of the lower row's numbers.
-CSV_FILENAME = "cornell_shading.csv"
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"albedo": (0.0, 1.0), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0), "max_abs": (0.0, 1.0),
-              "ref_mean": (0.0, 1.0), "k_A_mean": (0.0, 1.0), "ref_stderr": (0.0, 0.5),
-              "pixels": (1, 10 ** 7), "bounces": (1, 1000), "rays": (2, 10 ** 6)}
+__all__ = ["measure", "plot", "WALL_COLOURS", "SHOWN_ALBEDO"]
+
+ORDER = 160
+FIGSIZE = (17.0, 7.2)
+
 #: Display colours (albedos) of the upper row: red left wall, green right wall, white rest.
 #: Chosen to look like the Cornell box, not measured reflectances.
 WALL_COLOURS = {"left_wall": (0.63, 0.07, 0.05), "right_wall": (0.14, 0.45, 0.09)}
 WHITE = (0.73, 0.71, 0.68)
 #: The grey albedo of the lower row's images.
 SHOWN_ALBEDO = 0.6
+
+
+#: The corrections whose error the bottom row shows, and their titles.
+_ERRORS = {"none": "k_A (black occluders)", "stewart_langer": "Stewart-Langer", "jimenez": "Jimenez fit"}
 
 
 def _colours(scene, gbuffer) -> np.ndarray:
@@ -58,37 +56,16 @@ def _colours(scene, gbuffer) -> np.ndarray:
     return out
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
-    """Draw ``cornell_shading.png`` and write ``cornell_shading.csv``.
-
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Small images and few rays (seconds), for CI.
-    seed : int, optional
-        Seed of the ray-traced references.
-
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import cornell_shading
-    >>> cornell_shading.FILENAME
-    'cornell_shading.png'
-    """
+def measure(profile) -> Rows:
+    """The rows of :func:`vobscure.experiments.shading.interreflection_rows` on the Cornell
+    box (exact floats in the CSV) and the images of both rows of panels (quick: small images
+    and few rays). Seed of the ray-traced references: ``profile.seed``."""
     from ...groundtruth import ambient_occlusion
     from ...scenes import get as get_scene
     from ...shading import LinearSky, ambient, bent_normal_lookup, multibounce_jimenez, stewart_langer
     from .. import shading as X
-    from ..common import new_figure, save_figure, write_csv
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    quick, seed = profile.quick, profile.seed
     measured = X.measure("cornell_box", quick=quick, seed=seed)
     rows = X.interreflection_rows(measured)
     scene = get_scene("cornell_box")
@@ -114,8 +91,23 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
         "Jimenez et al. 2016 fit": ambient(multibounce_jimenez(k, c), c),
         "bent-normal sky lookup": lookup,
     }
+    a = SHOWN_ALBEDO
+    ref = measured.reference[a]
+    arrays = {"valid": valid, "reference": ref, **{f"shaded|{t}": img for t, img in shaded.items()}}
+    for name in _ERRORS:
+        err = np.full(valid.shape, np.nan)
+        err[valid] = np.asarray(X.CORRECTIONS[name](measured.k_A[valid], a)) - ref[valid]
+        arrays[f"error|{name}"] = err
+    meta = {"shaded": list(shaded), "bounces": measured.bounces, "rays": measured.rays,
+            "corrections": list(X.CORRECTIONS)}
+    return Rows(rows, arrays=arrays, meta=meta, digits=None)
 
-    fig = new_figure(17.0, 7.2)
+
+def plot(rows, fig) -> None:
+    """Top: the ambient terms; bottom: the corrections' errors against path tracing."""
+    arrays, meta = rows.arrays, rows.meta
+    valid = arrays["valid"].astype(bool)
+    shaded = {t: arrays[f"shaded|{t}"] for t in meta["shaded"]}
     axes = fig.subplots(2, 5)
     for ax, (title, img) in zip(axes[0], shaded.items()):
         img = np.where(valid[..., None], img, 1.0)
@@ -124,16 +116,12 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
         ax.set_axis_off()
 
     a = SHOWN_ALBEDO
-    ref = measured.reference[a]
+    ref = arrays["reference"]
     im = axes[1, 0].imshow(ref, vmin=0.0, vmax=1.0, cmap="gray", interpolation="nearest")
-    axes[1, 0].set_title(f"ray-traced k'_A, albedo {a}, {measured.bounces} bounces", fontsize=9)
+    axes[1, 0].set_title(f"ray-traced k'_A, albedo {a}, {meta['bounces']} bounces", fontsize=9)
     fig.colorbar(im, ax=axes[1, 0], fraction=0.046)
-    for ax, (name, label) in zip(axes[1, 1:4], (("none", "k_A (black occluders)"),
-                                                 ("stewart_langer", "Stewart-Langer"),
-                                                 ("jimenez", "Jimenez fit"))):
-        err = np.full(valid.shape, np.nan)
-        err[valid] = np.asarray(X.CORRECTIONS[name](measured.k_A[valid], a)) - ref[valid]
-        im = ax.imshow(err, vmin=-0.3, vmax=0.3, cmap="RdBu_r", interpolation="nearest")
+    for ax, (name, label) in zip(axes[1, 1:4], _ERRORS.items()):
+        im = ax.imshow(arrays[f"error|{name}"], vmin=-0.3, vmax=0.3, cmap="RdBu_r", interpolation="nearest")
         row = next(r for r in rows if r["albedo"] == a and r["correction"] == name)
         ax.set_title(f"{label} - reference\nRMSE {row['rmse']:.3f}, bias {row['bias']:+.3f}", fontsize=9)
         ax.set_axis_off()
@@ -143,7 +131,7 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
     ax = axes[1, 4]
     albedos = sorted({r["albedo"] for r in rows})
     width = 0.25
-    for i, name in enumerate(X.CORRECTIONS):
+    for i, name in enumerate(meta["corrections"]):
         rmse = [next(r["rmse"] for r in rows if r["albedo"] == al and r["correction"] == name) for al in albedos]
         ax.bar(np.arange(len(albedos)) + (i - 1) * width, rmse, width, label=name)
     noise = [next(r["ref_stderr"] for r in rows if r["albedo"] == al) for al in albedos]
@@ -154,8 +142,5 @@ def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
     ax.legend(fontsize=7)
     ax.set_title("per albedo", fontsize=9)
     fig.suptitle(f"Cornell box: ambient terms of RTR 9.2 (top) and interreflection corrections against "
-                 f"path tracing (bottom), {gb.valid.shape[1]}x{gb.valid.shape[0]} px, {measured.rays} rays",
+                 f"path tracing (bottom), {valid.shape[1]}x{valid.shape[0]} px, {meta['rays']} rays",
                  fontsize=10)
-    png = save_figure(fig, out_dir / FILENAME)
-    csv = write_csv(out_dir / CSV_FILENAME, rows)
-    return [png, csv]

@@ -1,7 +1,7 @@
 """Loos & Sloan 2010, Fig. 4: the noise of sample patterns in images, without randomization.
 
 One PNG, ``fig4_noise.png``, and the numbers behind it, ``fig4_noise.csv``. The Cornell box
-through its own camera (256 x 256; 48 x 48 with ``quick``), ball radius R = 0.1 x the scene's
+through its own camera (256 x 256; 48 x 48 in the quick profile), ball radius R = 0.1 x the scene's
 extent (as :mod:`vobscure.experiments.claims`), per-pixel randomization off
 (``randomize=False``): every pixel uses the same pattern, so a pattern's error shows as
 structured noise, as in the paper's Fig. 4.
@@ -11,9 +11,9 @@ Left of the paper's figure, line sampling: ``vo_line`` with the disk patterns of
 (scrambled), 9 against 10 samples, and a curve of RMSE against n. Right, point sampling:
 ``vo_point`` with :func:`vobscure.patterns.ball`, 12 against 13 samples, and a curve.
 The error is the RMSE against the converged screen-space VO (:func:`vobscure.vo_reference`,
-4096 samples; 512 with ``quick``) with the same ``normal_clamp``. The electrostatic pattern
+4096 samples; 512 in the quick profile) with the same ``normal_clamp``. The electrostatic pattern
 is the table entry (seed 0, ``data/patterns/``), one deterministic pattern; a random or
-Sobol' pattern depends on its seed, so those are measured over :data:`SEEDS` seeds
+Sobol' pattern depends on its seed, so those are measured over 16 seeds (4 quick)
 (``seed``, ``seed + 1``, ...) and reported as the mean RMSE with its standard error over
 seeds. Variants: ``symmetric`` (antipodal pairs, the centre for odd n: the estimators'
 default and the headline), ``plain`` (no centre forced) and, for the disk, ``center`` (plain
@@ -44,12 +44,9 @@ z), each judged "met", "not met" or "undecided" at one-sided 95 % (:data:`GOAL_Z
 (f) The goal's ratios against n (lines, symmetric): electrostatic / random with the 0.7
     target and electrostatic / Sobol' with 1.0; error bars 2 standard errors.
 
-Regenerate with::
-
-    python -m vobscure.experiments.figures.fig4_noise --out docs/img
-
-which also prints the markdown tables of ``docs/patterns_results.md`` (a few minutes;
-``quick=True`` in seconds).
+Regenerate with ``vobscure figures fig4_noise --out docs/img``, which also writes the
+markdown tables of ``docs/patterns_results.md`` as ``fig4_noise.md`` (a few minutes;
+``--quick`` in seconds).
 
 References
 ----------
@@ -58,37 +55,30 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.5 and Fig. 4.
 
 from __future__ import annotations
 
-import argparse
 import math
-import sys
-import time
 from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "measure", "goal", "markdown", "main", "FILENAME", "CSV_FILENAME", "CSV_RANGES",
-           "METHODS", "VARIANTS", "LINE_COUNTS", "POINT_COUNTS", "SEEDS", "REFERENCE_SAMPLES",
-           "LIMIT_LINES", "GOAL", "GOAL_Z", "HEADLINE"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "fig4_noise.png"
-#: Name of the CSV of the measured numbers.
-CSV_FILENAME = "fig4_noise.csv"
+__all__ = ["measure", "plot", "goal", "markdown", "METHODS", "VARIANTS", "LINE_COUNTS", "POINT_COUNTS",
+           "PAPER_COUNTS", "LIMIT_LINES", "GOAL", "GOAL_Z", "HEADLINE"]
+
+ORDER = 20
+FIGSIZE = (18.0, 17.0)
+
 #: The pattern generators compared (:data:`vobscure.patterns.METHODS` names).
 METHODS = ("electrostatic", "random", "sobol")
 #: Pattern variants per estimator: the estimators' default (symmetric) and the paper's plain
 #: patterns, for the disk also with the centre forced.
 VARIANTS = {"line": ("symmetric", "plain", "center"), "point": ("symmetric", "plain")}
-#: Line (disk) counts of the curves, (full, quick); 9 and 10 are the paper's Fig. 4 (left).
-LINE_COUNTS = {False: tuple(range(3, 17)), True: (9, 10)}
-#: Point (ball) counts of the curves, (full, quick); 12 and 13 are the paper's Fig. 4 (right).
-POINT_COUNTS = {False: tuple(range(6, 17)), True: (12, 13)}
-#: Seeds per random / Sobol' pattern (full, quick).
-SEEDS = {False: 16, True: 4}
-#: Samples of the converged screen-space VO (full, quick).
-REFERENCE_SAMPLES = {False: 4096, True: 512}
+#: The paper's Fig. 4 counts, n against n + 1 (the image rows, and the curves of the quick profile).
+PAPER_COUNTS = {"line": (9, 10), "point": (12, 13)}
+#: Line (disk) counts of the curves in the full profile.
+LINE_COUNTS = tuple(range(3, 17))
+#: Point (ball) counts of the curves in the full profile.
+POINT_COUNTS = tuple(range(6, 17))
 #: Lines of the lines' own converged value (a table entry of ``data/patterns/``).
 LIMIT_LINES = 257
 #: The issue's targets for electrostatic RMSE / rival RMSE: at most 0.7 x random's, at most
@@ -99,14 +89,6 @@ GOAL = {"random": 0.7, "sobol": 1.0}
 GOAL_Z = 1.645
 #: The goal's configuration: (estimator, samples, variant, normal_clamp).
 HEADLINE = ("line", 9, "symmetric", True)
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"samples": (1, 64), "normal_clamp": (0, 1), "seeds": (1, 1000), "width": (1, 8192),
-              "height": (1, 8192), "ref_samples": (2, 10 ** 6), "rmse_ref": (0.0, 1.0),
-              "rmse_ref_se": (0.0, 1.0), "rmse_ref_sd": (0.0, 1.0), "rmse_ref_first": (0.0, 1.0),
-              "bias_ref": (-1.0, 1.0), "rmse_limit": (0.0, 1.0), "rmse_limit_se": (0.0, 1.0),
-              "limit_rmse_ref": (0.0, 1.0), "ref_noise": (0.0, 1.0), "target": (0.0, 10.0),
-              "ratio": (0.0, 100.0), "ratio_se": (0.0, 100.0), "z": (-1e4, 1e4),
-              "ratio_limit": (0.0, 100.0), "ratio_limit_se": (0.0, 100.0), "pixels": (1, 10 ** 8)}
 
 _SCENE = "cornell_box"
 _COLUMNS = ("estimator", "normal_clamp", "variant", "method", "samples", "seeds", "width", "height",
@@ -115,7 +97,6 @@ _COLUMNS = ("estimator", "normal_clamp", "variant", "method", "samples", "seeds"
             "ratio_se", "z", "ratio_limit", "ratio_limit_se", "verdict", "pixels")
 _COLORS = {"electrostatic": "#d62728", "random": "#7f7f7f", "sobol": "#9467bd"}
 _NAMES = {"electrostatic": "electrostatic", "random": "random", "sobol": "Sobol'"}
-_SHOWN = {"line": (9, 10), "point": (12, 13)}
 
 
 # ----------------------------------------------------------------------------- setup
@@ -130,9 +111,8 @@ class _Setup:
     ref_noise: dict      # normal_clamp -> RMS noise of the reference, or None (not measured)
 
 
-@lru_cache(maxsize=2)
 def _setup(size: tuple, seed: int, ref_samples: int, noise: bool) -> _Setup:
-    """Computed once per process and settings (shared by :func:`measure` and :func:`make`)."""
+    """The G-buffer, radius, references and the lines' limit of one measurement."""
     from ... import scenes
     from ...gbuffer import render_gbuffer
     from ...metrics import error
@@ -155,20 +135,6 @@ def _setup(size: tuple, seed: int, ref_samples: int, noise: bool) -> _Setup:
     return _Setup(gb, radius, reference, limit, ref_noise)
 
 
-def _settings(quick: bool, size, seed, seeds):
-    from ..._validate import check_int
-    from ._common import size_for
-
-    quick = bool(quick)
-    size = size_for(quick, size)
-    if len(size) != 2:
-        raise ValueError(f"size must be (width, height), got {size!r}")
-    size = tuple(check_int(s, "size") for s in size)
-    seed = check_int(seed, "seed", minimum=0)
-    seeds = SEEDS[quick] if seeds is None else check_int(seeds, "seeds", minimum=2)
-    return quick, size, seed, seeds
-
-
 def _pattern(estimator: str, n: int, method: str, variant: str, seed: int):
     """The pattern of one row: the electrostatic table entry (seed 0), else the seed's draw."""
     from ... import patterns as P
@@ -188,27 +154,25 @@ def _estimate(setup: _Setup, estimator: str, pattern, normal_clamp: bool):
 
 
 # ----------------------------------------------------------------------------- data
-def measure(quick: bool = False, *, size=None, seed: int = 0, seeds=None, line_counts=None,
-            point_counts=None) -> list[dict]:
+def measure(profile, *, seeds=None, line_counts=None, point_counts=None) -> Rows:
     """RMSE of every (estimator, normal_clamp, variant, method, samples), randomization off.
 
     Parameters
     ----------
-    quick : bool, optional
-        48 x 48 pixels, 512 reference samples, 4 seeds, only the paper's counts (seconds).
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
-        Seed of the reference; the random and Sobol' patterns use ``seed``, ``seed + 1``, ...
-        The electrostatic pattern is always the table entry (seed 0).
+    profile : Profile
+        Quick: 512 reference samples, 4 seeds, only :data:`PAPER_COUNTS`; full: 4096
+        samples, 16 seeds, :data:`LINE_COUNTS` and :data:`POINT_COUNTS`. Image size
+        ``profile.size``; ``profile.seed`` seeds the reference, and the random and Sobol'
+        patterns use it, it + 1, ... The electrostatic pattern is always the table entry
+        (seed 0).
     seeds : int, optional
-        Seeds per random / Sobol' pattern; default :data:`SEEDS`.
+        Seeds per random / Sobol' pattern, instead of the profile's.
     line_counts, point_counts : iterable of int, optional
-        Counts of the curves; default :data:`LINE_COUNTS`, :data:`POINT_COUNTS`.
+        Counts of the curves, instead of the profile's.
 
     Returns
     -------
-    list of dict
+    Rows
         One row per configuration, with the columns of the CSV: ``rmse_ref`` is the mean RMSE
         against the converged screen-space VO over the seeds (the one pattern's for
         electrostatic), ``rmse_ref_se`` its standard error over seeds (None for
@@ -218,15 +182,43 @@ def measure(quick: bool = False, *, size=None, seed: int = 0, seeds=None, line_c
         ``ratio`` = electrostatic / mean RMSE with ``ratio_se`` (delta method), ``z`` =
         (mean - electrostatic) / stderr (positive: electrostatic lower), the same ratio
         against the limit, and the ``verdict`` of :func:`goal`'s rule against ``target``
-        (:data:`GOAL`).
+        (:data:`GOAL`). Arrays: the images of panels (a) and (b).
     """
+    from ..._validate import check_int
+
+    size, seed = profile.size, profile.seed
+    seeds = profile.pick(4, 16) if seeds is None else check_int(seeds, "seeds", minimum=2)
+    counts = {"line": tuple(profile.pick(PAPER_COUNTS["line"], LINE_COUNTS) if line_counts is None
+                            else line_counts),
+              "point": tuple(profile.pick(PAPER_COUNTS["point"], POINT_COUNTS) if point_counts is None
+                             else point_counts)}
+    ref_samples = profile.pick(512, 4096)
+    setup = _setup(size, seed, ref_samples, not profile.quick)
+    rows = _rows(setup, counts, size, seed, seeds, ref_samples)
+    arrays, meta = _images(setup, counts, seed)
+    meta.update(size=list(size), seed=seed, quick=profile.quick, radius=setup.radius)
+    return Rows(rows, columns=_COLUMNS, arrays=arrays, meta=meta)
+
+
+def _images(setup: _Setup, counts, seed):
+    """The images of panels (a) and (b) and the RMSE of each (the headline's normal setting)."""
     from ...metrics import error
 
-    quick, size, seed, seeds = _settings(quick, size, seed, seeds)
-    counts = {"line": tuple(LINE_COUNTS[quick] if line_counts is None else line_counts),
-              "point": tuple(POINT_COUNTS[quick] if point_counts is None else point_counts)}
-    ref_samples = REFERENCE_SAMPLES[quick]
-    setup = _setup(size, seed, ref_samples, not quick)
+    nc = HEADLINE[3]
+    arrays = {"reference": setup.reference[nc], "limit": setup.limit[nc]}
+    meta = {"limit_rmse": error(setup.limit[nc], setup.reference[nc]).rmse, "shown_rmse": {}}
+    for estimator in ("line", "point"):
+        for n in (n for n in PAPER_COUNTS[estimator] if n in counts[estimator]):
+            for method in METHODS:
+                v = _estimate(setup, estimator, _pattern(estimator, n, method, "symmetric", seed), nc)
+                arrays[f"{estimator}|{n}|{method}"] = v
+                meta["shown_rmse"][f"{estimator}|{n}|{method}"] = error(v, setup.reference[nc]).rmse
+    return arrays, meta
+
+
+def _rows(setup: _Setup, counts, size, seed, seeds, ref_samples) -> list[dict]:
+    from ...metrics import error
+
     rows = []
     for estimator in ("line", "point"):
         for variant in VARIANTS[estimator]:
@@ -369,81 +361,45 @@ def goal(rows, *, estimator: str = HEADLINE[0], samples: int = HEADLINE[1], vari
 
 
 # ----------------------------------------------------------------------------- figure
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``fig4_noise.png`` and write ``fig4_noise.csv``.
-
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 pixels, 512 reference samples, 4 seeds and only the paper's counts (seconds),
-        for CI. The panels are the same.
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
-        Seed of the reference and the first seed of the random and Sobol' patterns.
-    rows : list of dict, optional
-        The result of :func:`measure` with the same ``quick``, ``size`` and ``seed``, when
-        the caller has it already.
-
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``, each written atomically; the CSV
-        has the rows of :func:`measure`, deterministic by ``seed``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import fig4_noise
-    >>> fig4_noise.FILENAME, fig4_noise.GOAL["random"]
-    ('fig4_noise.png', 0.7)
-    """
-    from ..common import new_figure
-    from ._common import write_figure
-
-    quick, size, seed, _ = _settings(quick, size, seed, None)
-    rows = measure(quick, size=size, seed=seed) if rows is None else list(rows)
-    setup = _setup(size, seed, REFERENCE_SAMPLES[quick], not quick)
+def plot(rows, fig) -> None:
+    """Panels (a) to (f) from :func:`measure`'s rows."""
+    m = rows.meta
     nc = HEADLINE[3]
-
-    fig = new_figure(18.0, 17.0)
     parts = fig.subfigures(3, 1, height_ratios=[1.45, 1.45, 1.1], hspace=0.02)
-    _image_rows(parts[0], setup, rows, "line", nc, seed)
-    _image_rows(parts[1], setup, rows, "point", nc, seed)
+    _image_rows(parts[0], rows, "line", nc, m["seed"])
+    _image_rows(parts[1], rows, "point", nc, m["seed"])
     _curves(parts[2], rows, nc)
-    w, h = size
+    w, h = m["size"]
     k = max((r["seeds"] for r in rows), default=1)
     fig.suptitle(f"Loos & Sloan 2010, Fig. 4 / Sec. 4.5: sample patterns without per-pixel randomization "
-                 f"(Cornell box, {w} x {h}, R = {setup.radius:.3g} = 0.1 x extent, half-ball; random and "
-                 f"Sobol' over {k} seeds{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
+                 f"(Cornell box, {w} x {h}, R = {m['radius']:.3g} = 0.1 x extent, half-ball; random and "
+                 f"Sobol' over {k} seeds{', quick' if m['quick'] else ''})", fontsize=13)
 
 
-def _image_rows(subfig, setup, rows, estimator, nc, seed):
-    from ...metrics import error
+def _image_rows(subfig, rows, estimator, nc, seed):
     from ._common import error_panel, fmt, image_panel
+
+    a = rows.arrays
 
     by = {(r["method"], r["samples"]): r for r in rows if r["estimator"] == estimator
           and r["variant"] == "symmetric" and bool(r["normal_clamp"]) == nc}
-    counts = [n for n in _SHOWN[estimator] if ("electrostatic", n) in by]
-    ref = setup.reference[nc]
+    counts = [n for n in PAPER_COUNTS[estimator] if ("electrostatic", n) in by]
+    ref = a["reference"]
     axes = subfig.subplots(max(1, len(counts)), 1 + 2 * len(METHODS), squeeze=False)
     for i, n in enumerate(counts):
         first = axes[i, 0]
         if i == 0:
             im = image_panel(first, ref, "converged screen-space VO\n(vo_reference)", fontsize=9)
         elif estimator == "line":
-            lim_rmse = error(setup.limit[nc], ref).rmse
-            image_panel(first, setup.limit[nc], f"lines' limit ({LIMIT_LINES} lines)\n"
+            lim_rmse = rows.meta["limit_rmse"]
+            image_panel(first, a["limit"], f"lines' limit ({LIMIT_LINES} lines)\n"
                                                 f"RMSE {fmt(lim_rmse, 4)}", fontsize=9)
         else:
             first.axis("off")
         for j, method in enumerate(METHODS):
-            p = _pattern(estimator, n, method, "symmetric", seed)
-            v = _estimate(setup, estimator, p, nc)
+            v = a[f"{estimator}|{n}|{method}"]
             r = by[(method, n)]
-            shown = error(v, ref).rmse
+            shown = rows.meta["shown_rmse"][f"{estimator}|{n}|{method}"]
             if method == "electrostatic":
                 stat = "table pattern (seed 0)"
             else:
@@ -562,7 +518,7 @@ def markdown(rows, *, command=None, seconds=None) -> str:
     for estimator in ("line", "point"):
         for nc in (True, False):
             for variant in VARIANTS[estimator]:
-                for n in _SHOWN[estimator]:
+                for n in PAPER_COUNTS[estimator]:
                     sel = {r["method"]: r for r in rows if r["estimator"] == estimator and r["samples"] == n
                            and r["variant"] == variant and bool(r["normal_clamp"]) == nc}
                     if len(sel) < len(METHODS):
@@ -581,7 +537,7 @@ def markdown(rows, *, command=None, seconds=None) -> str:
               "| lower |",
               "|---|---|---|---|---|---|---|"]
     for estimator in ("line", "point"):
-        a, b = _SHOWN[estimator]
+        a, b = PAPER_COUNTS[estimator]
         for nc in (True, False):
             for variant in VARIANTS[estimator]:
                 sel = {r["samples"]: r for r in rows if r["estimator"] == estimator
@@ -598,7 +554,7 @@ def markdown(rows, *, command=None, seconds=None) -> str:
     for estimator in ("line", "point"):
         variants = VARIANTS[estimator]
         ns = sorted({r["samples"] for r in rows if r["estimator"] == estimator})
-        if len(ns) <= len(_SHOWN[estimator]):
+        if len(ns) <= len(PAPER_COUNTS[estimator]):
             continue
         lines += ["", f"### RMSE against n, {'lines' if estimator == 'line' else 'points'}, half-ball "
                   "(electrostatic / random mean / Sobol' mean)", "",
@@ -611,30 +567,3 @@ def markdown(rows, *, command=None, seconds=None) -> str:
                 cells.append(" / ".join(_f(sel[m]["rmse_ref"]) if m in sel else "" for m in METHODS))
             lines.append(f"| {n} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
-
-
-def main(argv=None) -> int:
-    """``python -m vobscure.experiments.figures.fig4_noise [--quick] [--out DIR] [--seeds K]``:
-    measure, draw the figure, write the CSV and print the markdown tables."""
-    parser = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.fig4_noise",
-                                     description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="48 x 48, 4 seeds, the paper's counts only")
-    parser.add_argument("--out", default="docs/img", help="directory of the PNG and CSV (default docs/img)")
-    parser.add_argument("--seeds", type=int, default=None, help="seeds per random / Sobol' pattern")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the reference and the first pattern seed")
-    parser.add_argument("--no-figure", action="store_true", help="print the tables only")
-    args = parser.parse_args(argv)
-    t0 = time.perf_counter()
-    rows = measure(args.quick, seed=args.seed, seeds=args.seeds)
-    paths = [] if args.no_figure else make(args.out, args.quick, seed=args.seed, rows=rows)
-    seconds = time.perf_counter() - t0
-    command = "python -m vobscure.experiments.figures.fig4_noise " + " ".join(
-        sys.argv[1:] if argv is None else argv)
-    print(markdown(rows, command=command.strip(), seconds=seconds))
-    for p in paths:
-        print(p, file=sys.stderr)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

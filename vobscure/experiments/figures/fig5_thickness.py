@@ -1,12 +1,12 @@
 """Loos & Sloan 2010, Fig. 5: the thickness model off and on at silhouettes.
 
 One PNG, ``fig5_thickness.png``, and the numbers it plots, ``fig5_thickness.csv``. The scene
-is the Cornell box through its own camera (256 x 256; 48 x 48 with ``quick``), the ball
+is the Cornell box through its own camera (256 x 256; 48 x 48 quick), the ball
 radius R = 0.1 x the scene's extent, seed 0; the G-buffer and the ground truth are those of
 :func:`vobscure.experiments.claims.measurement` (so the numbers agree with
-``docs/results.md``, and a process that also draws Fig. 6 or Fig. 7 computes them once).
+``docs/results.md``, and a process that also draws Fig. 6 or Fig. 7 measures them once).
 
-(a) Visibility, half-ball (``normal_clamp=True``; ``normal_clamp=False`` draws the ball):
+(a) Visibility, half-ball (``normal_clamp=True``, where the silhouettes are the main error):
     ``vo_line`` (9 lines) and ``vo_area`` (1 area sample) without the thickness model and
     with ``thickness`` = :data:`THICKNESS_SHOWN` x R, one frame each, no blur, beside the
     Embree ground truth (``ground_truth(quantity="volumetric")``). Titles: RMSE and bias
@@ -23,11 +23,8 @@ radius R = 0.1 x the scene's extent, seed 0; the G-buffer and the ground truth a
 (d) Bias on the far side of the silhouettes against thickness / R: the halo of Fig. 5 is
     the large negative bias with the model off.
 
-Regenerate with::
-
-    python -c "from vobscure.experiments.figures import fig5_thickness as f; f.make('docs/img')"
-
-(about 3-4 minutes, most of it the ground truth; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures fig5_thickness --out docs/img`` (about 3-4 minutes, most
+of it the ground truth; ``--quick`` in seconds).
 
 References
 ----------
@@ -36,89 +33,79 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.3 and Fig. 5.
 
 from __future__ import annotations
 
-from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "FACTORS", "THICKNESS_SHOWN",
-           "METHODS"]
+from ._common import Rows, claims_measurements
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "fig5_thickness.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "fig5_thickness.csv"
-#: Thicknesses of the sweep, as fractions of the ball radius (full, quick).
-FACTORS = {False: (0.125, 0.177, 0.25, 0.354, 0.5, 0.707, 1.0, 1.41, 2.0, 2.83, 4.0),
-           True: (0.25, 1.0, 4.0)}
+__all__ = ["measure", "plot", "THICKNESS_SHOWN", "METHODS"]
+
+ORDER = 30
+FIGSIZE = (17.0, 12.5)
+
 #: The thickness of the images, a fraction of R: the value docs/results.md quotes (between
 #: the box's 0.1-thick walls, 0.27 R, and its 0.6-wide boxes, 1.6 R).
 THICKNESS_SHOWN = 0.5
 #: The estimators compared: (label, method, samples).
 METHODS = (("lines 9", "line", 9), ("area 1", "area", 1))
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"samples": (1, 64), "normal_clamp": (0, 1), "factor": (0.0, 100.0),
-              "thickness": (0.0, 100.0), "rmse_band": (0.0, 1.0), "bias_band": (-1.0, 1.0),
-              "rmse_far": (0.0, 1.0), "bias_far": (-1.0, 1.0), "rmse_all": (0.0, 1.0),
-              "bias_all": (-1.0, 1.0), "pixels_band": (1, 10 ** 8), "pixels_far": (1, 10 ** 8)}
 
 _SCENE = "cornell_box"
+_NORMAL_CLAMP_SHOWN = True   # panels (a) and (b): the half-ball, where the silhouettes are the main error
 _COLUMNS = ("method", "samples", "normal_clamp", "factor", "thickness", "rmse_band", "bias_band",
             "rmse_far", "bias_far", "rmse_all", "bias_all", "pixels_band", "pixels_far")
 _COLORS = {"lines 9": "#1f77b4", "area 1": "#2ca02c"}
 _WALL, _BOX = 0.1, 0.6     # the Cornell box's wall thickness and box width (scene units)
 
 
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0,
-         normal_clamp: bool = True) -> list[Path]:
-    """Draw ``fig5_thickness.png`` and write ``fig5_thickness.csv``.
+def measure(profile, *, claims=None) -> Rows:
+    """The error of lines and area at silhouettes for every thickness, and the images shown.
 
     Parameters
     ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 pixels, fewer reference samples and three thicknesses (seconds), for CI.
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
-        Seed of the estimators' noise and of the ground truth.
-    normal_clamp : bool, optional
-        Which quantity panels (a) and (b) show: the half-ball (default, where the silhouettes
-        are the main error) or the ball. Panels (c) and (d) always show both.
+    profile : Profile
+        Quick: thicknesses 0.25, 1 and 4 R; full: 11 from 0.125 to 4 R (half octaves).
+        Image size and seed as the profile's.
+    claims : dict, optional
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``, each written atomically. The CSV has
-        one row per (method, normal_clamp, thickness); ``factor`` and ``thickness`` are empty
-        for the model switched off.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import fig5_thickness
-    >>> fig5_thickness.FILENAME
-    'fig5_thickness.png'
+    Rows
+        One row per (method, normal_clamp, thickness); ``factor`` and ``thickness`` are empty
+        for the model switched off. Arrays: the images of panels (a) and (b), the ground
+        truth and the silhouette masks.
     """
     from .. import claims as C
-    from ..common import new_figure
-    from ._common import size_for, write_figure
+    from ...metrics import error
 
-    quick = bool(quick)
-    size = size_for(quick, size)
-    m = C.measurement(_SCENE, size=size, seed=seed, quick=quick)
-    width = max(1, int(round(min(size) / 128)))   # "a few pixels", as in claims
+    claims = claims_measurements(profile) if claims is None else claims
+    m = claims[_SCENE]
+    factors = profile.pick((0.25, 1.0, 4.0), (0.125, 0.177, 0.25, 0.354, 0.5, 0.707, 1.0, 1.41, 2.0, 2.83, 4.0))
+    width = max(1, int(round(min(profile.size) / 128)))   # "a few pixels", as in claims
     band, far = C.silhouette_mask(m.gb.depth, width=width)
-    rows, shown = _sweep(m, band, far, FACTORS[quick], seed, bool(normal_clamp))
+    rows, shown = _sweep(m, band, far, factors, profile.seed, _NORMAL_CLAMP_SHOWN)
+    truth = m.truth[_NORMAL_CLAMP_SHOWN]
+    arrays = {"truth": truth.value, "truth_stderr": truth.stderr, "band": band, "far": far, "valid": m.gb.valid}
+    titles = {}
+    for (label, f), v in shown.items():
+        arrays[f"{label}|{f}"] = v
+        titles[f"{label}|{f}"] = [error(v, truth.value, mask=band).rmse, error(v, truth.value, mask=far).bias]
+    meta = {"radius": m.radius, "size": list(profile.size), "seed": profile.seed, "quick": profile.quick,
+            "truth_samples": int(truth.samples), "shown": titles}
+    return Rows(rows, columns=_COLUMNS, arrays=arrays, meta=meta)
 
-    fig = new_figure(17.0, 12.5)
+
+def plot(rows, fig) -> None:
+    """Panels (a) to (d) from :func:`measure`'s rows."""
+    m = rows.meta
     parts = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 1.15], hspace=0.03)
-    _images(parts[0], parts[1], m, shown, rows, band, far, bool(normal_clamp))
-    _plots(parts[2], rows, m.radius)
-    w, h = size
+    _images(parts[0], parts[1], rows, _NORMAL_CLAMP_SHOWN)
+    _plots(parts[2], rows, m["radius"])
+    w, h = m["size"]
     fig.suptitle(f"Loos & Sloan 2010, Fig. 5 / Sec. 4.3: the thickness model at silhouettes "
-                 f"(Cornell box, {w} x {h}, R = {m.radius:.3g} = 0.1 x extent, seed {seed}"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
+                 f"(Cornell box, {w} x {h}, R = {m['radius']:.3g} = 0.1 x extent, seed {m['seed']}"
+                 f"{', quick' if m['quick'] else ''})", fontsize=13)
 
 
 # ----------------------------------------------------------------------------- data
@@ -156,21 +143,22 @@ def _sweep(m, band, far, factors, seed, normal_clamp_shown):
 
 
 # ----------------------------------------------------------------------------- drawing
-def _images(top, bottom, m, shown, rows, band, far, nc):
+def _images(top, bottom, rows, nc):
     import matplotlib as mpl
 
-    from ...metrics import error
     from ._common import BACKGROUND, error_panel, fmt, image_panel
 
-    truth = m.truth[nc]
+    a = rows.arrays
+    truth = SimpleNamespace(value=a["truth"], stderr=a["truth_stderr"], samples=rows.meta["truth_samples"])
+    band, far, valid = a["band"].astype(bool), a["far"].astype(bool), a["valid"].astype(bool)
     panels = []
     for label, _, _ in METHODS:
         for f in (None, THICKNESS_SHOWN):
-            v = shown[(label, f)]
-            e_band, e_far = error(v, truth.value, mask=band), error(v, truth.value, mask=far)
+            v = a[f"{label}|{f}"]
+            rmse_band, bias_far = rows.meta["shown"][f"{label}|{f}"]
             what = "thickness off" if f is None else f"thickness {f:g} R"
-            panels.append((label, f, v, f"{label}, {what}\nband RMSE {fmt(e_band.rmse)}, "
-                                        f"far-side bias {e_far.bias:+.3f}"))
+            panels.append((label, f, v, f"{label}, {what}\nband RMSE {fmt(rmse_band)}, "
+                                        f"far-side bias {bias_far:+.3f}"))
     axes = top.subplots(1, len(panels) + 1)
     for ax, (_, _, img, title) in zip(axes, panels):
         im = image_panel(ax, img, title)
@@ -185,7 +173,7 @@ def _images(top, bottom, m, shown, rows, band, far, nc):
     for ax, (label, f, img, _) in zip(axes, panels):
         im = error_panel(ax, img, truth.value,
                          f"{label}, {'off' if f is None else f'{f:g} R'}: estimate - truth")
-    top_mask = np.where(m.gb.valid, 0.0, np.nan)
+    top_mask = np.where(valid, 0.0, np.nan)
     top_mask[band] = 1.0
     top_mask[far] = 2.0
     cmap = mpl.colors.ListedColormap(["#f2f2f2", "#fdae61", "#b2182b"]).with_extremes(bad=BACKGROUND)

@@ -2,7 +2,7 @@
 
 One PNG, ``fig6_normals.png``, and the numbers it plots, ``fig6_normals.csv``. Both scenes of
 :data:`vobscure.experiments.claims.SCENES` (the Cornell box and the blob) through their own
-cameras (256 x 256; 48 x 48 with ``quick``), ball radius R = 0.1 x the scene's extent,
+cameras (256 x 256; 48 x 48 quick), ball radius R = 0.1 x the scene's extent,
 seed 0. Estimates, ground truths and ray-cast AO are those of
 :func:`vobscure.experiments.claims.measurement`, so the raw numbers agree with the tables of
 ``docs/results.md`` and a process that also draws Fig. 5 or Fig. 7 computes them once.
@@ -24,11 +24,8 @@ seed 0. Estimates, ground truths and ray-cast AO are those of
 
 "Finer-scale detail" (Sec. 4.4) is a visual claim; (c) and (d) are its measurable proxies.
 
-Regenerate with::
-
-    python -c "from vobscure.experiments.figures import fig6_normals as f; f.make('docs/img')"
-
-(a few minutes, most of it the two scenes' ground truths; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures fig6_normals --out docs/img`` (a few minutes, most of it the two
+scenes' ground truths; ``--quick`` in seconds).
 
 References
 ----------
@@ -37,75 +34,69 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 4.4 and Fig. 6.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "IMAGE_CONFIGS", "BAR_CONFIGS"]
+from ._common import Rows, claims_measurements
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "fig6_normals.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "fig6_normals.csv"
+__all__ = ["measure", "plot", "IMAGE_CONFIGS", "BAR_CONFIGS"]
+
+ORDER = 40
+FIGSIZE = (18.0, 13.0)
+
 #: Configurations (labels of :data:`vobscure.experiments.claims.CONFIGS`) of the image rows.
 IMAGE_CONFIGS = ("lines 9", "points 12")
 #: Configurations of the bar charts.
 BAR_CONFIGS = ("lines 5", "lines 9", "points 12", "points 33")
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"normal_clamp": (0, 1), "samples": (1, 64), "corr_ao": (-1.0, 1.0),
-              "corr_ao_blurred": (-1.0, 1.0), "gt_corr_ao": (-1.0, 1.0), "rmse_gt": (0.0, 1.0),
-              "rmse_gt_blurred": (0.0, 1.0), "bias_gt": (-1.0, 1.0), "rmse_ref": (0.0, 1.0),
-              "std_estimate": (0.0, 1.0), "std_gt": (0.0, 1.0)}
 
 _COLUMNS = ("scene", "config", "samples", "normal_clamp", "corr_ao", "corr_ao_blurred", "gt_corr_ao",
             "rmse_gt", "rmse_gt_blurred", "bias_gt", "rmse_ref", "std_estimate", "std_gt")
 _COLORS = {False: "#9ecae1", True: "#08519c"}
 
 
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path]:
-    """Draw ``fig6_normals.png`` and write ``fig6_normals.csv``.
+def measure(profile, *, claims=None) -> Rows:
+    """The normal off and on for lines and points on both scenes of the claims.
 
     Parameters
     ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 pixels and fewer reference samples (seconds), for CI; the panels are the same.
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
-        Seed of the estimators' noise and of the references.
+    profile : Profile
+        Image size and seed; quick: fewer reference samples.
+    claims : dict, optional
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``, each written atomically; the CSV has
-        one row per (scene, configuration, normal_clamp).
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import fig6_normals
-    >>> fig6_normals.FILENAME
-    'fig6_normals.png'
+    Rows
+        One row per (scene, configuration, normal_clamp); arrays: per scene the blurred
+        estimates of :data:`IMAGE_CONFIGS`, the AO and both ground truths.
     """
-    from ..common import new_figure
-    from ._common import measurements, size_for, write_figure
+    claims = claims_measurements(profile) if claims is None else claims
+    rows, blurred = _rows(claims)
+    arrays, meta = {}, {"size": list(profile.size), "seed": profile.seed, "quick": profile.quick,
+                        "scenes": list(claims), "radius": {}, "ao_rays": {}}
+    for scene, m in claims.items():
+        for config in IMAGE_CONFIGS:
+            for nc in (False, True):
+                arrays[f"{scene}|{config}|{nc}"] = blurred[(scene, config, nc)]
+        arrays[f"{scene}|ao"] = m.ao.value
+        for nc in (False, True):
+            arrays[f"{scene}|truth|{nc}"] = m.truth[nc].value
+        meta["radius"][scene] = m.radius
+        meta["ao_rays"][scene] = int(m.ao.samples)
+    return Rows(rows, columns=_COLUMNS, arrays=arrays, meta=meta)
 
-    quick = bool(quick)
-    size = size_for(quick, size)
-    data = measurements(size, seed, quick)
-    rows, blurred = _rows(data)
 
-    fig = new_figure(18.0, 13.0)
-    parts = fig.subfigures(len(data) + 1, 1, height_ratios=[1.0] * len(data) + [1.2], hspace=0.03)
-    for k, (scene, m) in enumerate(data.items()):
-        _image_row(parts[k], scene, m, rows, blurred, "abcdefgh"[k])
-    _bars(parts[-1], rows, letters="abcdefgh"[len(data):])
-    w, h = size
+def plot(rows, fig) -> None:
+    """Panels (a) to (e) from :func:`measure`'s rows."""
+    m = rows.meta
+    scenes = m["scenes"]
+    parts = fig.subfigures(len(scenes) + 1, 1, height_ratios=[1.0] * len(scenes) + [1.2], hspace=0.03)
+    for k, scene in enumerate(scenes):
+        _image_row(parts[k], scene, rows, "abcdefgh"[k])
+    _bars(parts[-1], rows, letters="abcdefgh"[len(scenes):])
+    w, h = m["size"]
     fig.suptitle(f"Loos & Sloan 2010, Fig. 6 / Sec. 4.4: the normal off (ball) and on (half-ball), "
-                 f"lines and points ({w} x {h}, R = 0.1 x extent, seed {seed}"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
+                 f"lines and points ({w} x {h}, R = 0.1 x extent, seed {m['seed']}"
+                 f"{', quick' if m['quick'] else ''})", fontsize=13)
 
 
 # ----------------------------------------------------------------------------- data
@@ -134,30 +125,32 @@ def _rows(data):
 
 
 # ----------------------------------------------------------------------------- drawing
-def _image_row(subfig, scene, m, rows, blurred, letter):
+def _image_row(subfig, scene, rows, letter):
     from ._common import SCENE_NAMES, corr, fmt, image_panel
 
+    a = rows.arrays
     by = {(r["config"], r["normal_clamp"]): r for r in rows if r["scene"] == scene}
     panels = []
     for config in IMAGE_CONFIGS:
         for nc in (False, True):
             r = by[(config, nc)]
-            panels.append((blurred[(scene, config, nc)],
+            panels.append((a[f"{scene}|{config}|{nc}"],
                            f"{config}, {'normal on (half-ball)' if nc else 'normal off (ball)'}\n"
                            f"corr AO {fmt(r['corr_ao_blurred'])}, RMSE gt {fmt(r['rmse_gt_blurred'])}"))
-    panels.append((m.ao.value, f"ray-cast AO within R\n{m.ao.samples} rays, cosine"))
+    ao = a[f"{scene}|ao"]
+    panels.append((ao, f"ray-cast AO within R\n{rows.meta['ao_rays'][scene]} rays, cosine"))
     for nc in (False, True):
-        t = m.truth[nc]
-        panels.append((t.value, f"ground truth, {'half-ball' if nc else 'ball'}\n"
-                                f"corr AO {fmt(corr(t.value, m.ao.value))}"))
+        t = a[f"{scene}|truth|{nc}"]
+        panels.append((t, f"ground truth, {'half-ball' if nc else 'ball'}\n"
+                          f"corr AO {fmt(corr(t, ao))}"))
     axes = subfig.subplots(1, len(panels))
     for ax, (img, title) in zip(axes, panels):
         im = image_panel(ax, img, title, fontsize=9)
     subfig.colorbar(im, ax=axes, shrink=0.85, label="visibility (1 = open)")
-    contrast = ", ".join(f"{'half-ball' if nc else 'ball'} {np.nanstd(m.truth[nc].value):.3f}"
+    contrast = ", ".join(f"{'half-ball' if nc else 'ball'} {np.nanstd(a[f'{scene}|truth|{nc}']):.3f}"
                          for nc in (False, True))
     subfig.suptitle(f"({letter}) {SCENE_NAMES.get(scene, scene)}: one frame each after the edge-aware blur; "
-                    f"R = {m.radius:.3g}; all shown on 0-1 (standard deviation of the truth over "
+                    f"R = {rows.meta['radius'][scene]:.3g}; all shown on 0-1 (standard deviation of the truth over "
                     f"pixels: {contrast})", fontsize=11)
 
 

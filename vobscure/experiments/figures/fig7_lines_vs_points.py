@@ -2,7 +2,7 @@
 
 One PNG, ``fig7_lines_vs_points.png``, and the numbers it plots, ``fig7_lines_vs_points.csv``.
 Both scenes of :data:`vobscure.experiments.claims.SCENES` through their own cameras
-(256 x 256; 48 x 48 with ``quick``), ball radius R = 0.1 x the scene's extent, seed 0. The
+(256 x 256; 48 x 48 quick), ball radius R = 0.1 x the scene's extent, seed 0. The
 converged screen-space VO (:func:`vobscure.vo_reference`) and the Embree ground truth are
 those of :func:`vobscure.experiments.claims.measurement` (shared with Fig. 5, Fig. 6 and
 :mod:`~vobscure.experiments.figures.screenspace_claims` within one process).
@@ -27,11 +27,8 @@ pattern, which ``vo_point`` does not tap), is in the CSV beside them.
 configurations against the ground truth and against taps; ``docs/results.md`` has the full
 tables.
 
-Regenerate with::
-
-    python -c "from vobscure.experiments.figures import fig7_lines_vs_points as f; f.make('docs/img')"
-
-(a few minutes, most of it the two scenes' references; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures fig7_lines_vs_points --out docs/img`` (a few minutes, most of it
+the two scenes' references; ``--quick`` in seconds).
 
 References
 ----------
@@ -40,96 +37,86 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 5.1, Table 1 and Fig. 7.
 
 from __future__ import annotations
 
-from pathlib import Path
+from ._common import Rows, claims_measurements
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "LINE_SAMPLES", "POINT_SAMPLES",
-           "PAIRS", "TIMING_RUNS"]
+__all__ = ["measure", "plot", "PAIRS"]
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "fig7_lines_vs_points.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "fig7_lines_vs_points.csv"
-#: Sample counts of the line curves (full, quick). 5 and 9 are the paper's.
-LINE_SAMPLES = {False: (3, 5, 7, 9, 13, 16), True: (5, 9)}
-#: Sample counts of the point curves (full, quick). 12 and 33 are the paper's.
-POINT_SAMPLES = {False: (6, 12, 16, 24, 33, 48), True: (12, 33)}
+ORDER = 50
+FIGSIZE = (17.0, 13.5)
+
 #: The claim pairs of Sec. 5.1: (lines, points).
 PAIRS = ((5, 12), (9, 33))
-#: Timed runs per configuration after a warm-up, (full, quick); the median is plotted.
-TIMING_RUNS = {False: 3, True: 1}
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"samples": (1, 256), "normal_clamp": (0, 1), "taps_per_pixel": (1, 256),
-              "ms": (0.0, 1e6), "rmse_ref": (0.0, 1.0), "rmse_ref_blurred": (0.0, 1.0),
-              "rmse_gt": (0.0, 1.0), "bias_ref": (-1.0, 1.0)}
 
 _COLUMNS = ("scene", "method", "samples", "normal_clamp", "taps_per_pixel", "ms", "rmse_ref",
             "rmse_ref_blurred", "bias_ref", "rmse_gt")
 _COLORS = {"line": "#1f77b4", "point": "#d62728"}
 
 
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path]:
-    """Draw ``fig7_lines_vs_points.png`` and write ``fig7_lines_vs_points.csv``.
+def measure(profile, *, claims=None) -> Rows:
+    """Time and error of lines and points at several sample counts, both scenes.
 
     Parameters
     ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 pixels, fewer reference samples, only the paper's sample counts (seconds).
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
-        Seed of the estimators' noise and of the references.
+    profile : Profile
+        Quick: only the paper's counts (lines 5, 9; points 12, 33), one timed run after the
+        warm-up; full: lines 3-16 and points 6-48 (6 counts each), 3 timed runs. Image size
+        and seed as the profile's.
+    claims : dict, optional
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``, each written atomically; the CSV has
-        one row per (scene, method, samples, normal_clamp). ``ms`` is machine-dependent; all
-        other columns are deterministic by ``seed``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import fig7_lines_vs_points
-    >>> fig7_lines_vs_points.FILENAME
-    'fig7_lines_vs_points.png'
+    Rows
+        One row per (scene, method, samples, normal_clamp). ``ms`` is machine-dependent; all
+        other columns are deterministic by the seed. Arrays: the Cornell box's frames of the
+        claim pairs (raw and blurred), its converged screen-space VO and ground truth.
     """
-    from ..common import new_figure
-    from ._common import measurements, size_for, write_figure
+    from ...metrics import error
 
-    quick = bool(quick)
-    size = size_for(quick, size)
-    data = measurements(size, seed, quick)
-    rows, frames = _sweep(data, quick, seed)
+    claims = claims_measurements(profile) if claims is None else claims
+    rows, frames = _sweep(claims, profile)
+    m = claims["cornell_box"]
+    ref, truth = m.reference[True], m.truth[True].value
+    arrays = {"reference": ref, "truth": truth}
+    for (method, n), (v, b) in frames.items():
+        arrays[f"{method}|{n}|raw"], arrays[f"{method}|{n}|blurred"] = v, b
+    meta = {"size": list(profile.size), "seed": profile.seed, "quick": profile.quick, "scenes": list(claims),
+            "ref_samples": m.settings["ref_samples"], "rmse_reference_truth": error(ref, truth).rmse}
+    return Rows(rows, columns=_COLUMNS, arrays=arrays, meta=meta)
 
-    fig = new_figure(17.0, 13.5)
+
+def plot(rows, fig) -> None:
+    """Panels (a) to (g) from :func:`measure`'s rows."""
+    m = rows.meta
     parts = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 1.2], hspace=0.03)
-    _image_rows(parts[0], parts[1], data["cornell_box"], rows, frames)
-    _curves(parts[2], rows, list(data))
-    w, h = size
+    _image_rows(parts[0], parts[1], rows)
+    _curves(parts[2], rows, m["scenes"])
+    w, h = m["size"]
     fig.suptitle(f"Loos & Sloan 2010, Fig. 7 / Sec. 5.1: line samples against point samples, "
-                 f"quality and time ({w} x {h}, R = 0.1 x extent, seed {seed}, NumPy on the CPU"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
+                 f"quality and time ({w} x {h}, R = 0.1 x extent, seed {m['seed']}, NumPy on the CPU"
+                 f"{', quick' if m['quick'] else ''})", fontsize=13)
 
 
 # ----------------------------------------------------------------------------- data
-def _sweep(data, quick, seed):
+def _sweep(data, profile):
     """Time and error of every (scene, method, samples, normal_clamp); the frames of (a), (b)."""
     from ... import methods
     from ...metrics import error
     from ...screenspace import bilateral_blur
     from ..common import time_calls
 
-    configs = ([methods.Config("line", n) for n in LINE_SAMPLES[quick]] +
-               [methods.Config("point", n) for n in POINT_SAMPLES[quick]])
+    seed = profile.seed
+    # 5 and 9 lines, 12 and 33 points are the paper's
+    configs = ([methods.Config("line", n) for n in profile.pick((5, 9), (3, 5, 7, 9, 13, 16))] +
+               [methods.Config("point", n) for n in profile.pick((12, 33), (6, 12, 16, 24, 33, 48))])
+    runs = profile.pick(1, 3)      # timed runs after a warm-up; the median is plotted
     rows, frames = [], {}
     for scene, m in data.items():
         for nc in (False, True):
             def frame(c, gb=m.gb, r=m.radius, nc=nc):
                 return lambda: c.run(gb, radius=r, normal_clamp=nc, seed=seed)
 
-            timings, images = time_calls({c: frame(c) for c in configs}, TIMING_RUNS[quick])
+            timings, images = time_calls({c: frame(c) for c in configs}, runs)
             ref, truth = m.reference[nc], m.truth[nc].value
             for c in configs:
                 method, n, v = c.method, c.samples, images[c]
@@ -145,28 +132,28 @@ def _sweep(data, quick, seed):
 
 
 # ----------------------------------------------------------------------------- drawing
-def _image_rows(top, bottom, m, rows, frames):
-    from ...metrics import error
+def _image_rows(top, bottom, rows):
     from ._common import fmt, image_panel
 
+    a = rows.arrays
     by = {(r["method"], r["samples"]): r for r in rows if r["scene"] == "cornell_box" and r["normal_clamp"]}
-    ref, truth = m.reference[True], m.truth[True]
+    ref = a["reference"]
     order = [c for pair in PAIRS for c in (("line", pair[0]), ("point", pair[1]))]
     names = {"line": "lines", "point": "points"}
     for subfig, k, letter in ((top, 0, "a"), (bottom, 1, "b")):
         axes = subfig.subplots(1, len(order) + 1)
         for ax, c in zip(axes, order):
             r = by[c]
-            img = frames[c][k]
+            img = a[f"{c[0]}|{c[1]}|{('raw', 'blurred')[k]}"]
             rmse = r["rmse_ref"] if k == 0 else r["rmse_ref_blurred"]
             im = image_panel(ax, img, f"{names[c[0]]} {c[1]}: {r['ms']:.0f} ms/frame\n"
                                       f"RMSE vs converged {fmt(rmse, 4)}")
         if k == 0:
             image_panel(axes[-1], ref, f"converged screen-space VO\nvo_reference, "
-                                       f"{m.settings['ref_samples']} samples")
+                                       f"{rows.meta['ref_samples']} samples")
         else:
-            image_panel(axes[-1], truth.value, f"Embree ground truth\nRMSE of the converged "
-                                               f"{fmt(error(ref, truth.value).rmse, 4)}")
+            image_panel(axes[-1], a["truth"], f"Embree ground truth\nRMSE of the converged "
+                                              f"{fmt(rows.meta['rmse_reference_truth'], 4)}")
         subfig.colorbar(im, ax=axes, shrink=0.85, label="visibility (1 = open)")
         what = ("one frame, no blur" if k == 0 else
                 "the same frames after the edge-aware blur (vo.bilateral_blur, defaults)")
@@ -176,9 +163,7 @@ def _image_rows(top, bottom, m, rows, frames):
 
 def _curves(subfig, rows, scenes):
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import FormatStrFormatter, LogLocator
-
-    from ._common import SCENE_NAMES
+    from ._common import SCENE_NAMES, log_log
 
     panels = [(s, nc) for s in scenes for nc in (False, True)]
     axes = subfig.subplots(1, len(panels))
@@ -197,13 +182,7 @@ def _curves(subfig, rows, scenes):
                     ax.plot([r["ms"]], [r["rmse_ref"]], "o", ms=11, mfc="none", mec=color, mew=1.6)
                 ax.annotate(str(r["samples"]), xy=(r["ms"], r["rmse_ref"]), xytext=(3, 3),
                             textcoords="offset points", fontsize=7.5, color=color)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        for axis in (ax.xaxis, ax.yaxis):
-            axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-            axis.set_major_formatter(FormatStrFormatter("%g"))
-            axis.set_minor_formatter(FormatStrFormatter(""))
-        ax.grid(True, which="both", color="0.9", lw=0.6)
+        log_log(ax)
         ax.set_xlabel("median ms per frame (log)")
         ax.set_ylabel("RMSE vs converged screen-space VO (log)")
         ax.set_title(f"({letter}) {SCENE_NAMES.get(scene, scene)}, {'half-ball' if nc else 'ball'}",

@@ -1,7 +1,7 @@
 """Loos & Sloan 2010, Fig. 8 / Sec. 6: a small and a large radius, and their combination.
 
 One PNG, ``fig8_dual_radii.png``, and the numbers it plots, ``fig8_dual_radii.csv``. The
-Cornell box through its own camera (256 x 256; 48 x 48 with ``quick``), half-ball VO
+Cornell box through its own camera (256 x 256; 48 x 48 in the quick profile), half-ball VO
 (``normal_clamp=True``), radii r = :data:`RADII` x the scene's extent, seed 0.
 
 (a) ``vo_line`` (9 lines) at the small radius and at the large one, each after the
@@ -20,11 +20,8 @@ Cornell box through its own camera (256 x 256; 48 x 48 with ``quick``), half-bal
 The paper's claim: a small radius captures fine features but loses contact shadows and
 large-scale features, a large radius the reverse, and their product (or minimum) keeps both.
 
-Regenerate with::
-
-    python -c "from vobscure.experiments.figures import fig8_dual_radii as f; f.make('docs/img')"
-
-(a few minutes, most of it the two ground truths; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures fig8_dual_radii --out docs/img`` (a few minutes, most of
+it the two ground truths; ``--quick`` in seconds).
 
 References
 ----------
@@ -33,16 +30,17 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 6 and Fig. 8.
 
 from __future__ import annotations
 
-from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "RADII", "SAMPLES", "MODES"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "fig8_dual_radii.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "fig8_dual_radii.csv"
+__all__ = ["measure", "plot", "RADII", "SAMPLES", "MODES", "PROFILE_ROW"]
+
+ORDER = 60
+FIGSIZE = (17.0, 13.0)
+
 #: (small, large) radius as fractions of the scene's extent (the Cornell box's 3.75: radii
 #: 0.11 and 0.75, about the wall thickness and the boxes' size).
 RADII = (0.03, 0.2)
@@ -50,98 +48,77 @@ RADII = (0.03, 0.2)
 SAMPLES = 9
 #: Combination modes of :func:`vobscure.combine_radii`.
 MODES = ("product", "min")
-#: Points per ball of the ground truth (full, quick) and rays of the AO (full, quick).
-_GT_SAMPLES = {False: 1024, True: 128}
-_AO_RAYS = {False: 256, True: 64}
 #: The image row of panel (c), as a fraction of the height.
 PROFILE_ROW = 0.86
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"truth": (0, 1), "radius": (0.0, 100.0), "radius_large": (0.0, 100.0),
-              "mean": (0.0, 1.0), "corr_small_truth": (-1.0, 1.0), "corr_large_truth": (-1.0, 1.0),
-              "corr_ao": (-1.0, 1.0), "rmse_own_truth": (0.0, 1.0), "bias_own_truth": (-1.0, 1.0)}
 
 _SCENE = "cornell_box"
+_NORMAL_CLAMP = True         # half-ball VO, estimates and truth alike
 _KINDS = ("small", "large") + MODES
 _COLUMNS = ("image", "truth", "radius", "radius_large", "mean", "corr_small_truth",
             "corr_large_truth", "corr_ao", "rmse_own_truth", "bias_own_truth")
 _COLORS = {"small": "#1f77b4", "large": "#ff7f0e", "product": "#2ca02c", "min": "#9467bd"}
 
 
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, radii=RADII,
-         normal_clamp: bool = True, blur: bool = True) -> list[Path]:
-    """Draw ``fig8_dual_radii.png`` and write ``fig8_dual_radii.csv``.
+def measure(profile) -> Rows:
+    """The two radii, their combinations, and the same of the ground truth.
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 pixels, 128 points per ball for the ground truth (seconds), for CI.
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
-        Seed of the estimators' noise and of the ground truth.
-    radii : (float, float), optional
-        Small and large radius as fractions of the scene's extent.
-    normal_clamp : bool, optional
-        Half-ball (default) or ball VO, estimates and truth alike.
-    blur : bool, optional
-        Apply the edge-aware blur to each estimate before combining (the paper's pipeline).
+    ``vo_line`` (:data:`SAMPLES` lines) at both radii of :data:`RADII`, each after the
+    edge-aware blur, combined by each of :data:`MODES`; the ground truth with 128 points per
+    ball quick (1024 full) and ray-cast AO within the large radius with 64 rays (256). Image
+    size and seed as the profile's.
 
     Returns
     -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``, each written atomically; the CSV has
-        one row per image (small, large, product, min) and source (``truth`` 0: estimate,
-        1: ground truth).
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import fig8_dual_radii
-    >>> fig8_dual_radii.FILENAME
-    'fig8_dual_radii.png'
+    Rows
+        One row per image (small, large, product, min) and source (``truth`` 0: estimate,
+        1: ground truth); arrays: the eight images and the truths' standard errors.
     """
     from ... import scenes
     from ...gbuffer import render_gbuffer
     from ...groundtruth import ground_truth
     from ...screenspace import bilateral_blur, combine_radii, vo_line
-    from ..common import new_figure
-    from ._common import size_for, write_figure
 
-    quick = bool(quick)
-    size = size_for(quick, size)
-    small, large = (float(f) for f in radii)
-    if not 0.0 < small < large:
-        raise ValueError(f"radii must be (small, large) with 0 < small < large, got {radii!r}")
+    size, seed = profile.size, profile.seed
+    small, large = RADII
     scene = scenes.get(_SCENE)
     gb = render_gbuffer(scene, scene.camera(size))
     r = {"small": small * scene.extent, "large": large * scene.extent}
     est, truth = {}, {}
     for k, name in enumerate(("small", "large")):
-        v = vo_line(gb, radius=r[name], samples=SAMPLES, normal_clamp=normal_clamp, seed=seed)
-        est[name] = bilateral_blur(v, gb) if blur else v
+        v = vo_line(gb, radius=r[name], samples=SAMPLES, normal_clamp=_NORMAL_CLAMP, seed=seed)
+        est[name] = bilateral_blur(v, gb)
         truth[name] = ground_truth(scene, gb, quantity="volumetric", radius=r[name],
-                                      samples=_GT_SAMPLES[quick], normal_clamp=normal_clamp,
-                                      seed=seed + k, progress=False)
-    ao = ground_truth(scene, gb, quantity="ao", radius=r["large"], rays=_AO_RAYS[quick],
-                         seed=seed + 2, progress=False)
+                                   samples=profile.pick(128, 1024), normal_clamp=_NORMAL_CLAMP,
+                                   seed=seed + k, progress=False)
+    ao = ground_truth(scene, gb, quantity="ao", radius=r["large"], rays=profile.pick(64, 256),
+                      seed=seed + 2, progress=False)
     truth_img = {"small": truth["small"].value, "large": truth["large"].value}
     for mode in MODES:
         est[mode] = combine_radii(est["small"], est["large"], mode=mode)
         truth_img[mode] = combine_radii(truth_img["small"], truth_img["large"], mode=mode)
-    rows = _rows(est, truth_img, ao.value, r)
+    arrays = {**{f"estimate|{k}": v for k, v in est.items()}, **{f"truth|{k}": v for k, v in truth_img.items()},
+              **{f"stderr|{k}": t.stderr for k, t in truth.items()}}
+    meta = {"size": list(size), "seed": seed, "quick": profile.quick, "radii": r}
+    return Rows(_rows(est, truth_img, ao.value, r), columns=_COLUMNS, arrays=arrays, meta=meta)
 
-    fig = new_figure(17.0, 13.0)
+
+def plot(rows, fig) -> None:
+    """Panels (a) to (d) from :func:`measure`'s rows."""
+    m, a = rows.meta, rows.arrays
+    size, r = m["size"], m["radii"]
+    est = {k: a[f"estimate|{k}"] for k in _KINDS}
+    truth = {k: a[f"truth|{k}"] for k in _KINDS}
+    stderr = {k: SimpleNamespace(stderr=a[f"stderr|{k}"]) for k in ("small", "large")}
     parts = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 1.15], hspace=0.03)
     row = min(size[1] - 1, int(PROFILE_ROW * size[1]))
-    _image_row(parts[0], est, rows, r, row, "a", truth=False, blur=blur)
-    _image_row(parts[1], truth_img, rows, r, row, "b", truth=True, stderr=truth)
-    _plots(parts[2], est, truth_img, rows, row)
+    _image_row(parts[0], est, rows, r, row, "a", truth=False)
+    _image_row(parts[1], truth, rows, r, row, "b", truth=True, stderr=stderr)
+    _plots(parts[2], est, truth, rows, row)
     w, h = size
+    small, large = RADII
     fig.suptitle(f"Loos & Sloan 2010, Fig. 8 / Sec. 6: dual radii on the Cornell box ({w} x {h}, "
-                 f"{'half-ball' if normal_clamp else 'ball'} VO, r = {small:g} and {large:g} x extent, "
-                 f"lines {SAMPLES}, seed {seed}{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _COLUMNS)
+                 f"{'half-ball' if _NORMAL_CLAMP else 'ball'} VO, r = {small:g} and {large:g} x extent, "
+                 f"lines {SAMPLES}, seed {m['seed']}{', quick' if m['quick'] else ''})", fontsize=13)
 
 
 # ----------------------------------------------------------------------------- data

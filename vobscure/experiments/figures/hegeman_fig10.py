@@ -16,8 +16,7 @@ degrees, so cos theta is in [0, 0.5]). Eq. 9: V = P_z / (2 h) (1 + cos theta).
 (c) RMSE and bias of Eq. 9 per height bin (all orientations), both references; dotted: the
     ground truth's stderr.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import hegeman_fig10 as f;
-f.make('docs/img')"`` (seconds).
+Regenerate with ``vobscure figures hegeman_fig10 --out docs/img`` (seconds).
 
 References
 ----------
@@ -27,64 +26,42 @@ I3D 2006, Sec. 3 ("Visibility approximation for grass", Eq. 9) and Figs. 6, 10.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "hegeman_fig10.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "hegeman_fig10.csv"
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"height_lo": (0.0, 1.0), "height_hi": (0.0, 1.0), "cos_lo": (-1.0, 1.0), "cos_hi": (-1.0, 1.0),
-              "rmse": (0.0, 1.0), "bias": (-1.0, 1.0), "corr": (-1.0, 1.0), "model_mean": (0.0, 1.0),
-              "truth_mean": (0.0, 1.0), "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6),
-              "truth_rays": (2, 10 ** 5)}
+__all__ = ["measure", "plot"]
+
 
 _COLORS = {"cosine": "#1f77b4", "uniform": "#ff7f0e"}
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``hegeman_fig10.png`` and write ``hegeman_fig10.csv``.
+ORDER = 140
+FIGSIZE = (16.0, 11.0)
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Few points and rays (seconds), for CI.
-    seed : int, optional
-    rows : list of dict, optional
-        Rows of :func:`vobscure.experiments.trees.grass_rows` already measured.
 
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import hegeman_fig10
-    >>> hegeman_fig10.FILENAME
-    'hegeman_fig10.png'
-    """
+def measure(profile) -> Rows:
+    """Rows of :func:`vobscure.experiments.trees.grass_rows` and, for panel (a), every
+    point's relative height, Eq. 9 and the ground truth (quick: few points and rays)."""
     from .. import trees as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
-    if rows is None:
-        rows = X.grass_rows(quick, seed=seed)
+    quick, seed = profile.quick, profile.seed
+    rows = X.grass_rows(quick, seed=seed)
     d = X.grass_data(quick, seed=seed)
-    fig = new_figure(16.0, 11.0)
+    arrays = {"height": d["height"], "model": d["model"],
+              **{f"truth|{w}": np.asarray(d["truth"][w].value) for w in ("cosine", "uniform")}}
+    meta = {"seed": seed, "quick": quick, **X.setting(quick)}
+    return Rows(rows, columns=X.GRASS_COLUMNS, arrays=arrays, meta=meta)
+
+
+def plot(rows, fig) -> None:
+    """(a) every point against its height, (b)-(d) per height bin."""
+    s, a = rows.meta, rows.arrays
     top, bottom = fig.subfigures(2, 1, hspace=0.04)
     axes = top.subplots(1, 2)
     for ax, w in zip(axes, ("cosine", "uniform")):
-        t = np.asarray(d["truth"][w].value)
-        ax.scatter(d["height"], t, s=6, alpha=0.45, color=_COLORS[w], label=f"ray cast, {w}")
-        ax.scatter(d["height"], d["model"], s=6, alpha=0.45, color="#d62728", label="Eq. 9")
+        ax.scatter(a["height"], a[f"truth|{w}"], s=6, alpha=0.45, color=_COLORS[w], label=f"ray cast, {w}")
+        ax.scatter(a["height"], a["model"], s=6, alpha=0.45, color="#d62728", label="Eq. 9")
         overall = next(r for r in rows if r["reference"] == w and r["height_lo"] == 0.0
                        and r["height_hi"] == 1.0)
         ax.set_title(f"(a) every point, {w} reference: Eq. 9 RMSE {overall['rmse']:.3f}, bias "
@@ -100,10 +77,9 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path
     _bins(axes[0], rows, "cosine")
     _bins(axes[1], rows, "uniform")
     _errors(axes[2], rows)
-    s = X.setting(quick)
     fig.suptitle(f"Hegeman et al. 2006, Fig. 10: Eq. 9 on grass blades ({s['grass_points']} points, "
-                 f"ground truth {s['truth_rays']} rays, seed {seed}{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, X.GRASS_COLUMNS)
+                 f"ground truth {s['truth_rays']} rays, seed {s['seed']}{', quick' if s['quick'] else ''})",
+                 fontsize=13)
 
 
 def _fmt(x):

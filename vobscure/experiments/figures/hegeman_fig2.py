@@ -15,8 +15,8 @@ bounding sphere and ellipsoid).
     cosine-weighted and the uniform sky visibility; the ticks mark the ground truth's own
     standard error (the noise floor).
 
-Regenerate with ``python -c "from vobscure.experiments.figures import hegeman_fig2 as f;
-f.make('docs/img')"`` (about 20 s; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures hegeman_fig2 --out docs/img`` (about 20 s; ``--quick`` in
+seconds).
 
 References
 ----------
@@ -26,111 +26,86 @@ I3D 2006, Sec. 3 and Fig. 2.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "SCENES"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "hegeman_fig2.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "hegeman_fig2.csv"
+__all__ = ["measure", "plot", "SCENES"]
+
 #: The two leaf clouds: (registered scene name, label).
 SCENES = (("leaf_cloud", "sparse cloud (1500 leaves)"), ("leaf_cloud_dense", "dense cloud (6000 leaves)"))
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"shells": (1, 1), "parameter": (0.0, 1e4), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0),
-              "mae": (0.0, 1.0), "corr": (-1.0, 1.0), "rmse_calibration": (0.0, 1.0), "refit": (0, 1),
-              "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
-              "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6), "fit_points": (1, 10 ** 6),
-              "truth_rays": (2, 10 ** 5)}
-#: Image size (full, quick) and rays per pixel of panel (a).
-IMAGE_SIZE = {False: (128, 128), True: (40, 40)}
-IMAGE_RAYS = {False: 256, True: 32}
 
 _SOURCES = ("fitted", "predicted", "none", "fitted x10")
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``hegeman_fig2.png`` and write ``hegeman_fig2.csv``.
+ORDER = 110
+FIGSIZE = (16.0, 12.5)
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Few points, rays and pixels (seconds), for CI.
-    seed : int, optional
-        Seed of the points and of the ground truth.
-    rows : list of dict, optional
-        Rows of :func:`vobscure.experiments.trees.canopy_rows` already measured (the same
-        ``quick`` and ``seed``); measured when omitted.
 
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import hegeman_fig2
-    >>> hegeman_fig2.FILENAME
-    'hegeman_fig2.png'
-    """
+def measure(profile) -> Rows:
+    """Eq. 6 on the two leaf clouds: rows of :func:`vobscure.experiments.trees.canopy_rows`
+    (bounding sphere and ellipsoid), the per-pixel images of panel (a) (quick: 40 x 40, 32
+    rays; full: 128 x 128, 256) and the scored points of panel (b)."""
     from .. import trees as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
+    quick, seed = profile.quick, profile.seed
     names = [n for n, _ in SCENES]
-    if rows is None:
-        rows = X.canopy_rows(quick, seed=seed, scenes=names)
-    rows = [r for r in rows if r["scene"] in names and r["model"] == "hegeman"
+    rows = [r for r in X.canopy_rows(quick, seed=seed, scenes=names) if r["model"] == "hegeman"
             and r["shell"] in ("sphere", "ellipsoid")]
+    arrays, meta = {}, {"seed": seed, "quick": quick, **X.setting(quick), "density": {}, "parameter": {}}
+    for name, _ in SCENES:
+        im = X.canopy_images(name, size=profile.pick((40, 40), (128, 128)), rays=profile.pick(32, 256),
+                             seed=seed, quick=quick)
+        arrays[f"{name}|truth"], arrays[f"{name}|model"] = im["truth"], im["model"]
+        meta["density"][name] = im["density"]
+        d = X.canopy_data(name, quick, seed=seed)
+        for w in ("cosine", "uniform"):
+            arrays[f"{name}|{w}|truth"] = np.asarray(d["truth"][w].value)[d["score"]]
+            for source in ("fitted", "predicted"):
+                c = next(c for c in d["configs"] if c["model"] == "hegeman" and c["shell"] == "sphere"
+                         and c["source"] == source and c["reference"] == w)
+                arrays[f"{name}|{w}|{source}"] = c["values"]
+                meta["parameter"][f"{name}|{w}|{source}"] = c["parameter"]
+    return Rows(rows, columns=X.CANOPY_COLUMNS, arrays=arrays, meta=meta)
 
-    fig = new_figure(16.0, 12.5)
+
+def plot(rows, fig) -> None:
+    """(a) per pixel, (b) at the scored points, (c) RMSE per density source."""
+    s = rows.meta
     top, middle, bottom = fig.subfigures(3, 1, height_ratios=[0.72, 1.0, 0.85], hspace=0.03)
-    _images(top, quick, seed)
-    _scatter(middle, quick, seed)
+    _images(top, rows)
+    _scatter(middle, rows)
     _bars(bottom, rows)
-    s = X.setting(quick)
     fig.suptitle(f"Hegeman et al. 2006, Fig. 2: Eq. 6 on leaf clouds ({s['points']} points per cloud, "
-                 f"half fitted, half scored; ground truth {s['truth_rays']} rays, seed {seed}"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, X.CANOPY_COLUMNS)
+                 f"half fitted, half scored; ground truth {s['truth_rays']} rays, seed {s['seed']}"
+                 f"{', quick' if s['quick'] else ''})", fontsize=13)
 
 
-def _images(subfig, quick, seed):
-    from .. import trees as X
-    from ._common import error_panel, image_panel
+def _images(subfig, rows):
+    from ._common import error_panel, image_panel, pixel_rmse
 
     axes = subfig.subplots(1, 6)
     for i, (name, label) in enumerate(SCENES):
-        im = X.canopy_images(name, size=IMAGE_SIZE[quick], rays=IMAGE_RAYS[quick], seed=seed, quick=quick)
-        t, m = im["truth"], im["model"]
-        ok = np.isfinite(t) & np.isfinite(m)
-        rmse = float(np.sqrt(np.mean((m[ok] - t[ok]) ** 2))) if ok.any() else float("nan")
+        t, m = rows.arrays[f"{name}|truth"], rows.arrays[f"{name}|model"]
+        rmse = pixel_rmse(m, t)
         a = axes[3 * i:3 * i + 3]
         image_panel(a[0], t, f"{label}\nray cast, cosine", fontsize=9)
-        image_panel(a[1], m, f"Eq. 6, sphere,\nfitted density {im['density']:.3g}", fontsize=9)
+        image_panel(a[1], m, f"Eq. 6, sphere,\nfitted density {rows.meta['density'][name]:.3g}", fontsize=9)
         e = error_panel(a[2], m, t, f"Eq. 6 - ray cast\npixel RMSE {rmse:.3f}", fontsize=9)
     subfig.colorbar(e, ax=axes, shrink=0.8, label="signed difference (right panels)")
     subfig.suptitle("(a) per pixel, as in the paper's figure: ground truth, Eq. 6, difference "
                     "(grey scale: visibility 0-1; pink: background)", fontsize=11)
 
 
-def _scatter(subfig, quick, seed):
-    from .. import trees as X
-
+def _scatter(subfig, rows):
     axes = subfig.subplots(1, 4)
     for i, (name, label) in enumerate(SCENES):
-        d = X.canopy_data(name, quick, seed=seed)
         for j, w in enumerate(("cosine", "uniform")):
             ax = axes[2 * i + j]
-            truth = np.asarray(d["truth"][w].value)[d["score"]]
+            truth = rows.arrays[f"{name}|{w}|truth"]
             for source, color in (("fitted", "#1f77b4"), ("predicted", "#d62728")):
-                c = next(c for c in d["configs"] if c["model"] == "hegeman" and c["shell"] == "sphere"
-                         and c["source"] == source and c["reference"] == w)
+                c = {"values": rows.arrays[f"{name}|{w}|{source}"],
+                     "parameter": rows.meta["parameter"][f"{name}|{w}|{source}"]}
                 e = float(np.sqrt(np.mean((c["values"] - truth) ** 2)))
                 ax.scatter(truth, c["values"], s=5, alpha=0.35, color=color,
                            label=f"{source} ({c['parameter']:.3g}): RMSE {e:.3f}")

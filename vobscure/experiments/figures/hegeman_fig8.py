@@ -15,8 +15,7 @@ canopy scene: the leaf clouds are the uniform control).
 (c) Eq. 6 against Reeves-Blau (Figs. 4, 12), each with its parameter fitted (1-D least
     squares) on the bounding sphere and the ellipsoid: RMSE and Pearson correlation.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import hegeman_fig8 as f;
-f.make('docs/img')"`` (about 30 s; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures hegeman_fig8 --out docs/img`` (about 30 s; ``--quick`` in seconds).
 
 References
 ----------
@@ -26,89 +25,58 @@ I3D 2006, Sec. 3-5 and Figs. 3, 4, 8, 12.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "hegeman_fig8.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "hegeman_fig8.csv"
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"shells": (1, 8), "parameter": (0.0, 1e4), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0),
-              "mae": (0.0, 1.0), "corr": (-1.0, 1.0), "rmse_calibration": (0.0, 1.0), "refit": (0, 1),
-              "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
-              "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6), "fit_points": (1, 10 ** 6),
-              "truth_rays": (2, 10 ** 5)}
-#: Image size (full, quick) and rays per pixel of panel (a).
-IMAGE_SIZE = {False: (72, 128), True: (27, 48)}
-IMAGE_RAYS = {False: 256, True: 32}
+__all__ = ["measure", "plot"]
+
 
 _TREES = (("tree", "apple-like tree"), ("tree_poplar", "poplar-like tree"))
 _CLOUDS = (("leaf_cloud", "sparse cloud"), ("leaf_cloud_dense", "dense cloud"))
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``hegeman_fig8.png`` and write ``hegeman_fig8.csv``.
+ORDER = 120
+FIGSIZE = (17.0, 13.0)
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Few points, rays and pixels (seconds), for CI.
-    seed : int, optional
-    rows : list of dict, optional
-        Rows of :func:`vobscure.experiments.trees.canopy_rows` already measured.
 
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import hegeman_fig8
-    >>> hegeman_fig8.CSV_FILENAME
-    'hegeman_fig8.csv'
-    """
+def measure(profile) -> Rows:
+    """Rows of :func:`vobscure.experiments.trees.canopy_rows` with a fitted or predicted
+    parameter, and the poplar's per-pixel images of panel (a) (quick: 27 x 48, 32 rays;
+    full: 72 x 128, 256)."""
     from .. import trees as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
-    if rows is None:
-        rows = X.canopy_rows(quick, seed=seed)
-    rows = [r for r in rows if r["source"] in ("fitted", "predicted")]
+    quick, seed = profile.quick, profile.seed
+    rows = [r for r in X.canopy_rows(quick, seed=seed) if r["source"] in ("fitted", "predicted")]
+    im = X.canopy_images("tree_poplar", size=profile.pick((27, 48), (72, 128)), rays=profile.pick(32, 256),
+                         seed=seed, quick=quick, shells=("sphere", "ellipsoid"))
+    arrays = {"truth": im["truth"], **{f"model|{k}": v for k, v in im["models"].items()}}
+    meta = {"seed": seed, "quick": quick, **X.setting(quick), "densities": dict(im["densities"])}
+    return Rows(rows, columns=X.CANOPY_COLUMNS, arrays=arrays, meta=meta)
 
-    fig = new_figure(17.0, 13.0)
+
+def plot(rows, fig) -> None:
+    """(a) the poplar per pixel, (b) the shells, (c) Reeves-Blau."""
+    s = rows.meta
     top, middle, bottom = fig.subfigures(3, 1, height_ratios=[1.05, 1.0, 1.0], hspace=0.03)
-    _images(top, quick, seed)
+    _images(top, rows)
     _shells(middle, rows)
     _reeves_blau(bottom, rows)
-    s = X.setting(quick)
     fig.suptitle(f"Hegeman et al. 2006, Figs. 3, 4, 8, 12: Eq. 6 on clustered trees, its shells, and "
                  f"Reeves-Blau ({s['points']} points per scene, half fitted, half scored; ground truth "
-                 f"{s['truth_rays']} rays, seed {seed}{', quick' if quick else ''})", fontsize=12.5)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, X.CANOPY_COLUMNS)
+                 f"{s['truth_rays']} rays, seed {s['seed']}{', quick' if s['quick'] else ''})", fontsize=12.5)
 
 
-def _images(subfig, quick, seed):
-    from .. import trees as X
-    from ._common import error_panel, image_panel
+def _images(subfig, rows):
+    from ._common import error_panel, image_panel, pixel_rmse
 
-    im = X.canopy_images("tree_poplar", size=IMAGE_SIZE[quick], rays=IMAGE_RAYS[quick], seed=seed,
-                         quick=quick, shells=("sphere", "ellipsoid"))
-    t = im["truth"]
+    t = rows.arrays["truth"]
     axes = subfig.subplots(1, 5)
     image_panel(axes[0], t, "poplar-like tree\nray cast, cosine", fontsize=9)
     for k, label in enumerate(("sphere", "ellipsoid")):
-        m = im["models"][label]
-        ok = np.isfinite(t) & np.isfinite(m)
-        rmse = float(np.sqrt(np.mean((m[ok] - t[ok]) ** 2))) if ok.any() else float("nan")
-        image_panel(axes[1 + k], m, f"Eq. 6, bounding {label}\ndensity {im['densities'][label]:.3g}",
+        m = rows.arrays[f"model|{label}"]
+        rmse = pixel_rmse(m, t)
+        image_panel(axes[1 + k], m, f"Eq. 6, bounding {label}\ndensity {rows.meta['densities'][label]:.3g}",
                     fontsize=9)
         e = error_panel(axes[3 + k], m, t, f"{label} - ray cast\npixel RMSE {rmse:.3f}", fontsize=9)
     subfig.colorbar(e, ax=axes, shrink=0.8, label="signed difference")

@@ -18,8 +18,7 @@ Poisson model with the leaves' mean projected area A / 2).
 (b) RMSE against distance over the ring's points (per point, not the mean), per model; dotted:
     the ground truth's own stderr.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import hegeman_fig9 as f;
-f.make('docs/img')"`` (seconds).
+Regenerate with ``vobscure figures hegeman_fig9 --out docs/img`` (seconds).
 
 References
 ----------
@@ -29,68 +28,42 @@ I3D 2006, Sec. 3 ("Interaction with Objects", Eqs. 7-8) and Figs. 5, 9.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "MODELS"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "hegeman_fig9.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "hegeman_fig9.csv"
+__all__ = ["measure", "plot", "MODELS"]
+
 #: The occluder models: (model, label, colour).
 MODELS = (("hegeman", "Eqs. 7-8 (Hegeman)", "#d62728"), ("exact", "opaque sphere, exact", "#1f77b4"),
           ("porous", "porous sphere (Poisson)", "#2ca02c"))
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"distance": (0.0, 100.0), "distance_r": (0.0, 10.0), "sphere_radius": (0.0, 100.0),
-              "rmse": (0.0, 1.0), "bias": (-1.0, 1.0), "model_mean": (0.0, 1.0), "truth_mean": (0.0, 1.0),
-              "truth_stderr": (0.0, 0.5), "points": (1, 10 ** 6), "truth_rays": (2, 10 ** 5)}
 
 _TREES = (("tree", "apple-like tree"), ("tree_poplar", "poplar-like tree"))
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``hegeman_fig9.png`` and write ``hegeman_fig9.csv``.
+ORDER = 130
+FIGSIZE = (16.0, 11.5)
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Three rings of eight points, few rays (seconds), for CI.
-    seed : int, optional
-    rows : list of dict, optional
-        Rows of :func:`vobscure.experiments.trees.ground_rows` already measured.
 
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import hegeman_fig9
-    >>> hegeman_fig9.FILENAME
-    'hegeman_fig9.png'
-    """
+def measure(profile) -> Rows:
+    """Rows of :func:`vobscure.experiments.trees.ground_rows`: the ground under the trees
+    (quick: three rings of eight points, few rays)."""
     from .. import trees as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
-    if rows is None:
-        rows = X.ground_rows(quick, seed=seed)
-    fig = new_figure(16.0, 11.5)
+    meta = {"seed": profile.seed, "quick": profile.quick, **X.setting(profile.quick)}
+    return Rows(X.ground_rows(profile.quick, seed=profile.seed), columns=X.GROUND_COLUMNS, meta=meta)
+
+
+def plot(rows, fig) -> None:
+    """The ground truth and each model per ring (top), their RMSE (bottom)."""
+    s = rows.meta
     top, bottom = fig.subfigures(2, 1, height_ratios=[1.0, 1.0], hspace=0.04)
     ring = [r for r in rows if r["distance"] is not None]
     _curves(top, ring, "truth")
     _curves(bottom, ring, "rmse")
-    s = X.setting(quick)
     fig.suptitle(f"Hegeman et al. 2006, Fig. 9: the tree's occlusion of the ground ({s['ring_points']} "
-                 f"points per ring, ground truth {s['truth_rays']} rays, seed {seed}"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, X.GROUND_COLUMNS)
+                 f"points per ring, ground truth {s['truth_rays']} rays, seed {s['seed']}"
+                 f"{', quick' if s['quick'] else ''})", fontsize=13)
 
 
 def _curves(subfig, rows, what):

@@ -19,8 +19,8 @@ rows of :func:`vobscure.experiments.trees.convergence_rows` (``table`` = ``"conv
 (d) The paper's cost claim: time per point of Eq. 6 relative to ambient only (a constant) and
     to Reeves-Blau, beside the paper's 2300 / 460 = 5.0 and 580 / 460 = 1.26.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import hegeman_tradeoff as f;
-f.make('docs/img')"`` (about a minute; ``quick=True`` in seconds; times vary from run to run).
+Regenerate with ``vobscure figures hegeman_tradeoff --out docs/img`` (about a minute; ``--quick`` in
+seconds; times vary from run to run).
 
 References
 ----------
@@ -30,27 +30,12 @@ I3D 2006, Sec. 4 (the NVShaderPerf throughputs and frame rates).
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "hegeman_tradeoff.png"
-#: Name of the CSV of the plotted numbers.
-CSV_FILENAME = "hegeman_tradeoff.csv"
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"rays": (1, 10 ** 5), "rmse": (0.0, 1.0), "rmse_corrected": (0.0, 1.0),
-              "reference_stderr": (0.0, 0.5), "rmse_sqrt_rays": (0.0, 100.0), "points": (1, 10 ** 7),
-              "reference_rays": (2, 10 ** 5), "model_rmse": (0.0, 1.0), "model_rmse_corrected": (0.0, 1.0),
-              "equal_rays": (0.0, 10 ** 8), "extrapolated": (0, 1), "lower_bound": (0, 1), "model_us": (0.0, 10 ** 5),
-              "raycast_us": (0.0, 10 ** 7), "time_ratio": (0.0, 10 ** 4), "speedup": (0.0, 10 ** 8),
-              "speedup_cpu": (0.0, 10 ** 8),
-              "raycast_timing_points": (1, 10 ** 8),
-              "timing_points": (1, 10 ** 8), "us_per_point": (0.0, 10 ** 5), "vs_ambient": (0.0, 10 ** 6),
-              "vs_reeves_blau": (0.0, 10 ** 4), "paper_vs_ambient": (5.0, 5.0),
-              "paper_vs_reeves_blau": (1.26, 1.27), "repeats": (1, 1000)}
+__all__ = ["measure", "plot"]
+
 
 
 def _columns():
@@ -67,40 +52,30 @@ _SCENE_LABELS = {"leaf_cloud": "sparse cloud", "leaf_cloud_dense": "dense cloud"
                  "tree_poplar": "poplar tree", "grass": "grass"}
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``hegeman_tradeoff.png`` and write ``hegeman_tradeoff.csv``.
+ORDER = 150
+FIGSIZE = (17.0, 16.0)
 
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Few points and rays, ray counts 4-16 (seconds), for CI.
-    seed : int, optional
-    rows : dict, optional
-        ``{"convergence": ..., "tradeoff": ..., "cost": ...}`` rows already measured.
 
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import hegeman_tradeoff
-    >>> hegeman_tradeoff.FILENAME
-    'hegeman_tradeoff.png'
-    """
+def measure(profile) -> Rows:
+    """The rows of :func:`vobscure.experiments.trees.convergence_rows`,
+    :func:`~vobscure.experiments.trees.tradeoff_rows` and
+    :func:`~vobscure.experiments.trees.cost_rows`, each with its ``table`` (quick: few points
+    and rays, ray counts 4-16)."""
     from .. import trees as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
-    if rows is None:
-        rows = {"convergence": X.convergence_rows(quick, seed=seed), "tradeoff": X.tradeoff_rows(quick, seed=seed),
-                "cost": X.cost_rows(quick, seed=seed)}
-    conv, trade, cost = rows["convergence"], rows["tradeoff"], rows["cost"]
-    fig = new_figure(17.0, 16.0)
+    quick, seed = profile.quick, profile.seed
+    conv, trade, cost = (X.convergence_rows(quick, seed=seed), X.tradeoff_rows(quick, seed=seed),
+                         X.cost_rows(quick, seed=seed))
+    table = ([{"table": "convergence", **r} for r in conv] + [{"table": "tradeoff", **r} for r in trade]
+             + [{"table": "cost", **r} for r in cost])
+    meta = {"seed": seed, "quick": quick, **X.setting(quick)}
+    return Rows(table, columns=_columns(), meta=meta)
+
+
+def plot(rows, fig) -> None:
+    """(a) convergence, (b) equal-error rays, (c) speed-up, (d) the paper's cost claim."""
+    s = rows.meta
+    conv, trade, cost = ([r for r in rows if r["table"] == t] for t in ("convergence", "tradeoff", "cost"))
     top, bottom = fig.subfigures(2, 1, height_ratios=[0.55, 1.45], hspace=0.03)
     _convergence(top, conv, trade)
     axes = bottom.subplots(1, 3, width_ratios=[1.0, 1.0, 0.8])
@@ -109,13 +84,9 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path
     _bars(axes[1], trade, "speedup", "(c) speed-up over the equal-error ray cast",
           "ray-cast time / model time, per point (log)", labels=False)
     _cost(axes[2], cost)
-    s = X.setting(quick)
     fig.suptitle(f"Hegeman et al. 2006: speed against accuracy (reference {s['truth_rays']} rays, ray casts "
                  f"at {', '.join(map(str, s['rays']))} rays, models timed on {s['timing_points']} points, "
-                 f"median of {s['repeats']}, seed {seed}{', quick' if quick else ''})", fontsize=12.5)
-    table = ([{"table": "convergence", **r} for r in conv] + [{"table": "tradeoff", **r} for r in trade]
-             + [{"table": "cost", **r} for r in cost])
-    return write_figure(fig, out_dir, FILENAME, table, CSV_FILENAME, _columns())
+                 f"median of {s['repeats']}, seed {s['seed']}{', quick' if s['quick'] else ''})", fontsize=12.5)
 
 
 def _targets(rows):

@@ -1,6 +1,6 @@
 """The sample-pattern figure: quality against the number of samples, per method (Sec. 4.5, Fig. 4).
 
-One PNG, ``patterns_quality.png``, that goes with ``docs/patterns.md`` and
+One PNG, ``patterns_quality.png`` (its curves in ``patterns_quality.csv``), that goes with ``docs/patterns.md`` and
 ``docs/patterns_results.md``:
 
 (a) disk patterns with the centre forced (``center=True``, plain), line sampling;
@@ -15,29 +15,24 @@ Quality is :func:`vobscure.patterns.quality`: the RMS error of a pattern's VO es
 random planes and creases whose exact VO is known, with its standard error. The patterns
 come from the tables in ``data/patterns/`` (generated when a table is missing).
 
-Regenerate with::
-
-    python -m vobscure.experiments.figures.patterns_quality --out docs/img
-
-which also prints the markdown tables of ``docs/patterns_results.md``.
+Regenerate with ``vobscure figures patterns_quality --out docs/img``; the markdown tables of
+``docs/patterns_results.md`` are ``tables(families())`` (:func:`families`, :func:`tables`).
 """
 
 from __future__ import annotations
 
-import argparse
 import math
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-__all__ = ["make", "measure", "paper_claims", "symmetry_effect", "rival_ratios", "default_choice", "markdown",
-           "main",
-           "FILENAME", "PAPER_CLAIMS", "PANELS"]
+from ._common import Rows
 
-#: Name of the one file :func:`make` writes.
-FILENAME = "patterns_quality.png"
+__all__ = ["measure", "plot", "families", "paper_claims", "symmetry_effect", "rival_ratios", "default_choice",
+           "tables", "Family", "PAPER_CLAIMS", "PANELS"]
+
+ORDER = 100
+FIGSIZE = (16.0, 14.0)
 
 #: Loos & Sloan 2010, Sec. 4.5: "In 3D 6, 12, and 33 samples have extremely low error compared
 #: to sets generated with other numbers of samples. In 2D 5, 7, 9, 13, and 16 samples have low
@@ -66,10 +61,10 @@ FIT_FROM = 3
 
 _COLORS = {"electrostatic": "#d62728", "lloyd": "#1f77b4", "poisson": "#2ca02c", "sobol": "#9467bd",
            "halton": "#8c564b", "random": "#7f7f7f", "spiral": "#ff7f0e"}
-# (full, quick)
-_TRIALS = {False: None, True: 1024}              # None: the tables' QUALITY_TRIALS
-_METHODS = {False: None, True: ("electrostatic", "sobol", "random")}
-_NMAX = {False: {"disk": 33, "ball": 40}, True: {"disk": 12, "ball": 12}}
+#: The quick profile's methods, trials and largest counts (the full profile: every method, the
+#: tables' QUALITY_TRIALS, n up to 33 on the disk and 40 in the ball).
+_QUICK = {"methods": ("electrostatic", "sobol", "random"), "trials": 1024, "nmax": {"disk": 12, "ball": 12}}
+_FULL_NMAX = {"disk": 33, "ball": 40}
 
 
 @dataclass
@@ -83,8 +78,9 @@ class Family:
     seconds: np.ndarray | None = None    # (k,) generation time recorded in the table (NaN: none)
 
 
-def measure(quick: bool = False, *, methods=None, trials=None, seed=None, family: str = "mixed") -> dict:
-    """Quality against n for every method and family.
+def families(quick: bool = False, *, methods=None, trials=None, seed=None, family: str = "mixed") -> dict:
+    """Quality against n for every method and family, with each trial's squared error (the
+    input of :func:`paper_claims`, :func:`symmetry_effect` and :func:`tables`).
 
     Parameters
     ----------
@@ -104,8 +100,9 @@ def measure(quick: bool = False, *, methods=None, trials=None, seed=None, family
     from ... import patterns as P
 
     quick = bool(quick)
-    methods = tuple(methods or _METHODS[quick] or P.METHODS)
-    trials = trials or _TRIALS[quick] or P.QUALITY_TRIALS
+    methods = tuple(methods or (_QUICK["methods"] if quick else P.METHODS))
+    trials = trials or (_QUICK["trials"] if quick else P.QUALITY_TRIALS)
+    nmax = _QUICK["nmax"] if quick else _FULL_NMAX
     seed = P.QUALITY_SEED if seed is None else seed
     out: dict = {"settings": {"trials": trials, "seed": seed, "family": family, "sources": {}}}
     for key, (domain, variant) in PANELS.items():
@@ -113,7 +110,7 @@ def measure(quick: bool = False, *, methods=None, trials=None, seed=None, family
         out[key] = {}
         for method in methods:
             table = P.load_table(domain, method, variant=variant)
-            counts = range(1, _NMAX[quick][domain] + 1)
+            counts = range(1, nmax[domain] + 1)
             ns, val, se, err2, secs = [], [], [], {}, []
             sources = set()
             for n in counts:
@@ -270,7 +267,7 @@ def default_choice(data: dict) -> list[dict]:
     return rows
 
 
-def markdown(data: dict) -> str:
+def tables(data: dict) -> str:
     """The tables of ``docs/patterns_results.md``."""
     st = data["settings"]
     lines = [f"Quality: `vobscure.patterns.quality(pattern)` (trials={st['trials']}, "
@@ -332,36 +329,35 @@ def markdown(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def make(out_dir, quick: bool = False, *, data=None) -> list[Path]:
-    """Draw ``patterns_quality.png``: quality against n per method and family.
-
-    Parameters
-    ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        Three methods, n <= 12, 1024 trials: seconds, for CI. The panels are the same.
-    data : dict, optional
-        The result of :func:`measure`, when the caller already has it.
+def measure(profile) -> Rows:
+    """Quality against n of :func:`families` (the quick profile: three methods, n <= 12, 1024
+    trials; the metric's own seed, :data:`vobscure.patterns.QUALITY_SEED`).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / "patterns_quality.png"]``, written atomically.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from vobscure.experiments.figures import patterns_quality
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     [p.name for p in patterns_quality.make(tmp, quick=True)]
-    ['patterns_quality.png']
+    Rows
+        One row per (family, method, n): ``rms_error``, its ``stderr`` and the ``seconds`` the
+        table records for generating the pattern (NaN: none).
     """
-    from ..common import new_figure
-    from ._common import write_figure
+    data = families(profile.quick)
+    rows = [{"family": key, "method": method, "n": int(n), "rms_error": float(v), "stderr": float(se),
+             "seconds": float(t)}
+            for key in PANELS for method, fam in data[key].items()
+            for n, v, se, t in zip(fam.n, fam.value, fam.stderr, fam.seconds)]
+    settings = data["settings"]
+    return Rows(rows, meta={"trials": settings["trials"], "seed": settings["seed"]})
 
-    data = measure(quick) if data is None else data
-    fig = new_figure(16.0, 14.0)
+
+def plot(rows, fig) -> None:
+    """Panels (a) to (i) from :func:`measure`'s rows."""
+    data = {key: {} for key in PANELS}
+    for r in rows:
+        data[r["family"]].setdefault(r["method"], []).append(r)
+    for key, by_method in data.items():
+        for method, rs in by_method.items():
+            by_method[method] = Family(np.array([r["n"] for r in rs]), np.array([r["rms_error"] for r in rs]),
+                                       np.array([r["stderr"] for r in rs]), {})
+    data["settings"] = rows.meta
     axes = fig.subplots(3, 3)
     titles = {
         (0, 0): ("disk-center", None, "(a) disk, centre forced (plain), line sampling"),
@@ -409,26 +405,3 @@ def make(out_dir, quick: bool = False, *, data=None) -> list[Path]:
     fig.suptitle(f"Sample-pattern quality: RMS error of the VO estimate over random planes and creases "
                  f"(vobscure.patterns.quality, {s['trials']} trials, seed {s['seed']}); error bars 2 stderr",
                  fontsize=12)
-    return write_figure(fig, out_dir, FILENAME)
-
-
-def main(argv=None) -> int:
-    """``python -m vobscure.experiments.figures.patterns_quality [--quick] [--out DIR]``: draw the
-    figure and print the markdown tables."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--out", default="docs/img", help="directory of the PNG (default docs/img)")
-    parser.add_argument("--family", default="mixed", choices=("mixed", "cap", "crease"),
-                        help="configurations of the quality metric (default mixed, the tables')")
-    parser.add_argument("--no-figure", action="store_true", help="print the tables only")
-    args = parser.parse_args(argv)
-    data = measure(args.quick, family=args.family)
-    paths = [] if args.no_figure else make(args.out, args.quick, data=data)
-    print(markdown(data))
-    for p in paths:
-        print(p, file=sys.stderr)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

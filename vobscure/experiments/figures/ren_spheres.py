@@ -13,8 +13,8 @@ rows, ``"timing"`` rows of :func:`~vobscure.experiments.spheres.timing_rows`).
 (f) Time per receiver against the number of spheres, product against shexp (and sum), with
     the ratio product / shexp printed per count: measured in the same run.
 
-Regenerate with ``python -c "from vobscure.experiments.figures import ren_spheres as f;
-f.make('docs/img')"`` (a few minutes on 2 cores; ``quick=True`` in seconds).
+Regenerate with ``vobscure figures ren_spheres --out docs/img`` (a few minutes on 2 cores;
+``--quick`` in seconds).
 
 References
 ----------
@@ -24,58 +24,42 @@ Scenes using Spherical Harmonic Exponentiation", SIGGRAPH 2006.
 
 from __future__ import annotations
 
-from pathlib import Path
+from ._common import Rows
 
-import numpy as np
+__all__ = ["measure", "plot", "COLUMNS"]
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "COLUMNS"]
+ORDER = 180
+FIGSIZE = (18.0, 11.0)
 
-FILENAME = "ren_spheres.png"
-CSV_FILENAME = "ren_spheres.csv"
 COLUMNS = ("table", "method", "exp", "order", "count", "points", "rmse", "bias", "max_abs", "ref_stderr",
            "depth_lo", "depth_hi", "product_us", "shexp_us", "sum_us", "ratio_product_shexp")
-CSV_RANGES = {"order": (1, 8), "rmse": (0.0, 1.0), "bias": (-1.0, 1.0), "ref_stderr": (0.0, 0.5),
-              "depth_lo": (0.0, 1.0), "depth_hi": (0.0, 1.0), "ratio_product_shexp": (0.0, 10 ** 4)}
 
 _STYLE = {("product", ""): ("k", "-", "product"), ("sum", ""): ("#888888", ":", "sum"),
           ("shexp", "hybrid"): ("#d62728", "-", "shexp, hybrid"), ("shexp", "ol"): ("#ff7f0e", "--", "shexp, OL"),
           ("shexp", "exact"): ("#1f77b4", "-.", "shexp, exact exp*")}
 
 
-def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path]:
-    """Draw ``ren_spheres.png`` and write ``ren_spheres.csv``.
-
-    Parameters
-    ----------
-    out_dir : str or path-like
-    quick : bool, optional
-        Few spheres, points and rays (seconds), for CI.
-    seed : int, optional
-    rows : dict, optional
-        ``{"count": ..., "depth": ..., "timing": ...}`` already measured.
-
-    Returns
-    -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import ren_spheres
-    >>> ren_spheres.FILENAME
-    'ren_spheres.png'
-    """
+def measure(profile) -> Rows:
+    """The rows of :func:`vobscure.experiments.spheres.union_rows` (``table`` "count" and
+    "depth") and :func:`~vobscure.experiments.spheres.timing_rows` ("timing"); quick: few
+    spheres, points and rays."""
     from .. import spheres as X
-    from ..common import new_figure
-    from ._common import write_figure
 
-    quick = bool(quick)
-    if rows is None:
-        by_count, by_depth = X.union_rows(quick, seed=seed)
-        rows = {"count": by_count, "depth": by_depth, "timing": X.timing_rows(quick, seed=seed)}
-    s = X.setting(quick)
+    quick, seed = profile.quick, profile.seed
+    by_count, by_depth = X.union_rows(quick, seed=seed)
+    timing = X.timing_rows(quick, seed=seed)
+    table = ([{"table": "count", **r} for r in by_count] + [{"table": "depth", **r} for r in by_depth]
+             + [{"table": "timing", **r} for r in timing])
+    return Rows(table, columns=COLUMNS, meta={"seed": seed, "quick": quick, **X.setting(quick)})
+
+
+def plot(rows, fig) -> None:
+    """(a)-(d) error per order, (e) against depth, (f) time, (g) speed-up."""
+    s = rows.meta
+    rows = {t: [r for r in rows if r["table"] == t] for t in ("count", "depth", "timing")}
+    for r in rows["count"] + rows["depth"]:
+        r["exp"] = r["exp"] or ""        # an empty cell: no exponential (product, sum)
     orders = sorted({r["order"] for r in rows["count"]})
-    fig = new_figure(18.0, 11.0)
     grid = fig.subplots(2, max(3, len(orders)), squeeze=False)
     for ax, order in zip(grid[0], orders):
         for key, (color, ls, label) in _STYLE.items():
@@ -136,8 +120,5 @@ def make(out_dir, quick: bool = False, *, seed: int = 0, rows=None) -> list[Path
     for ax in grid[1][3:]:
         ax.set_visible(False)
     fig.suptitle(f"Ren et al. 2006 sphere sets in SH against the exact union ({s['union_rays']} rays per point, "
-                 f"scales {', '.join(map(str, s['scales']))}, seed {seed}{', quick' if quick else ''})",
+                 f"scales {', '.join(map(str, s['scales']))}, seed {s['seed']}{', quick' if s['quick'] else ''})",
                  fontsize=12)
-    table = ([{"table": "count", **r} for r in rows["count"]] + [{"table": "depth", **r} for r in rows["depth"]]
-             + [{"table": "timing", **r} for r in rows["timing"]])
-    return write_figure(fig, out_dir, FILENAME, table, CSV_FILENAME, COLUMNS)

@@ -1,6 +1,6 @@
 """The line-versus-point figure: Table 1's configurations as images and as error against time.
 
-One PNG, ``screenspace_claims.png``, that goes with ``docs/results.md``:
+One PNG, ``screenspace_claims.png`` (its numbers in ``screenspace_claims.csv``), that goes with ``docs/results.md``:
 
 (a) the Cornell box, ball VO (``normal_clamp=False``): lines 5, lines 9, points 12, points 33
     (one frame each, seed 0, no blur), the converged screen-space VO (:func:`vobscure.vo_reference`)
@@ -11,26 +11,23 @@ One PNG, ``screenspace_claims.png``, that goes with ``docs/results.md``:
 (d) the same RMSE over depth taps per pixel (the machine-independent cost);
 (e) RMSE against the ground truth (sampling plus screen-space model error) over seconds.
 
-The numbers come from :func:`vobscure.experiments.claims.line_vs_point` (cached per process:
-drawn after the claims' tables, they are the numbers the tables show).
+The numbers come from :func:`vobscure.experiments.claims.measurement`, measured once per run of
+the figures and shared with Figs. 5-7.
 
-Regenerate with::
-
-    python -m vobscure.experiments.figures.screenspace_claims --out docs/img
-
-(``--quick``: 48 x 48 in seconds; ``vobscure figures screenspace_claims`` draws the same).
+Regenerate with ``vobscure figures screenspace_claims --out docs/img`` (``--quick``: 48 x 48
+in seconds).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "main", "FILENAME"]
+from ._common import Rows, claims_measurements
 
-#: Name of the one file :func:`make` writes.
-FILENAME = "screenspace_claims.png"
+__all__ = ["measure", "plot"]
+
+ORDER = 10
+FIGSIZE = (16.0, 13.2)
 
 _COLORS = {"lines 5": "#1f77b4", "lines 9": "#17becf", "points 12": "#d62728", "points 33": "#ff7f0e",
            "points 12 nearest": "#9467bd", "points 33 nearest": "#8c564b", "area 1": "#2ca02c"}
@@ -38,82 +35,69 @@ _MARKERS = {"cornell_box": "o", "blob": "s"}
 _IMAGE_CONFIGS = ("lines 5", "lines 9", "points 12", "points 33")
 
 
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0) -> list[Path]:
-    """Draw ``screenspace_claims.png``: Cornell-box images and error against time and taps.
+def measure(profile, *, claims=None) -> Rows:
+    """The rows of :func:`vobscure.experiments.claims.line_vs_point` for both scenes and the
+    Cornell box's images.
 
     Parameters
     ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 images and fewer reference samples (seconds), for CI; the panels are the same.
-    size : (int, int), optional
-        Image size; default 256 x 256 (48 x 48 with ``quick``).
-    seed : int, optional
+    profile : Profile
+        Image size ``profile.size`` (256 x 256; 48 x 48 and fewer reference samples quick), seed.
+    claims : dict, optional
+        The claims' measurement of ``profile`` (see :mod:`vobscure.experiments.figures`).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / "screenspace_claims.png"]``, written atomically.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from vobscure.experiments.figures import screenspace_claims
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     [p.name for p in screenspace_claims.make(tmp, quick=True, size=(16, 16))]
-    ['screenspace_claims.png']
+    Rows
+        One row per (scene, configuration, normal_clamp) with the columns of
+        :func:`~vobscure.experiments.claims.line_vs_point`; arrays: each shown configuration's
+        estimate, the converged screen-space VO and the ground truth (value and stderr) for
+        both normal settings.
     """
     from .. import claims as C
-    from ..common import new_figure
-    from ._common import size_for, write_figure
 
-    quick = bool(quick)
-    size = size_for(quick, size)
-    rows = [r for s in C.SCENES for r in C.line_vs_point(s, size=size, seed=seed, quick=quick)]
-    cornell = C.measurement("cornell_box", size=size, seed=seed, quick=quick)
+    claims = claims_measurements(profile) if claims is None else claims
+    rows = [dict(r) for s in C.SCENES for r in claims[s].rows]
+    cornell = claims["cornell_box"]
+    arrays = {}
+    for nc in (False, True):
+        for c in _IMAGE_CONFIGS:
+            arrays[f"{c}|{nc}"] = cornell.images[(c, nc)]
+        arrays[f"reference|{nc}"] = cornell.reference[nc]
+        arrays[f"truth|{nc}"] = cornell.truth[nc].value
+        arrays[f"truth_stderr|{nc}"] = cornell.truth[nc].stderr
+    meta = {"size": list(profile.size), "seed": profile.seed, "quick": profile.quick,
+            "truth_samples": int(cornell.truth[True].samples)}
+    return Rows(rows, arrays=arrays, meta=meta)
 
-    fig = new_figure(16.0, 13.2)
+
+def plot(rows, fig) -> None:
+    """Panels (a) to (e) from :func:`measure`'s rows."""
+    m = rows.meta
     parts = fig.subfigures(3, 1, height_ratios=[1.0, 1.0, 1.25], hspace=0.03)
     for k, nc in enumerate((False, True)):
-        _image_row(parts[k], cornell, rows, nc, "ab"[k])
+        _image_row(parts[k], rows, nc, "ab"[k])
     _scatter_row(parts[2], rows)
+    size = m["size"]
     fig.suptitle(f"Loos & Sloan 2010, Table 1 / Sec. 5.1 on the CPU: lines 5 and 9 against points 12 "
-                 f"and 33 ({size[0]} x {size[1]}, radius 0.1 x scene extent, seed {seed}"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME)
+                 f"and 33 ({size[0]} x {size[1]}, radius 0.1 x scene extent, seed {m['seed']}"
+                 f"{', quick' if m['quick'] else ''})", fontsize=13)
 
 
-def main(argv=None) -> int:
-    """``python -m vobscure.experiments.figures.screenspace_claims --out DIR [--quick] [--seed N]``:
-    measure both scenes (:func:`vobscure.experiments.claims.line_vs_point`) and draw the figure."""
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="python -m vobscure.experiments.figures.screenspace_claims",
-                                 description=__doc__.splitlines()[0])
-    ap.add_argument("--out", required=True, help="directory of the PNG")
-    ap.add_argument("--quick", action="store_true", help="48 x 48 and fewer reference samples (seconds)")
-    ap.add_argument("--size", type=int, nargs=2, metavar=("W", "H"), help="image size (default 256 256)")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
-    for path in make(args.out, quick=args.quick, size=args.size, seed=args.seed):
-        print(f"wrote {path}")
-    return 0
-
-
-def _image_row(subfig, m, rows, normal_clamp, letter):
+def _image_row(subfig, rows, normal_clamp, letter):
     from ._common import image_panel
 
+    a = rows.arrays
     by = {r["config"]: r for r in rows if r["scene"] == "cornell_box" and r["normal_clamp"] == normal_clamp}
-    panels = [(c, m.images[(c, normal_clamp)],
+    panels = [(c, a[f"{c}|{normal_clamp}"],
                f"{c}: {by[c]['taps_per_pixel']} taps/px, {1000 * by[c]['seconds']:.0f} ms\n"
                f"RMSE ref {by[c]['rmse_ref']:.3f}, truth {by[c]['rmse_gt']:.3f}") for c in _IMAGE_CONFIGS]
     ref_samples = by[_IMAGE_CONFIGS[0]]["ref_samples"]
-    truth = m.truth[normal_clamp]
-    panels.append(("reference", m.reference[normal_clamp],
+    panels.append(("reference", a[f"reference|{normal_clamp}"],
                    f"converged screen space\nvo_reference, {ref_samples} samples"))
-    panels.append(("truth", truth.value,
-                   f"Embree ground truth, {truth.samples} pts\nmean stderr {np.nanmean(truth.stderr):.4f}"))
+    panels.append(("truth", a[f"truth|{normal_clamp}"],
+                   f"Embree ground truth, {rows.meta['truth_samples']} pts\n"
+                   f"mean stderr {np.nanmean(a[f'truth_stderr|{normal_clamp}']):.4f}"))
     axes = subfig.subplots(1, len(panels))
     for ax, (_, img, title) in zip(axes, panels):
         im = image_panel(ax, img, title)
@@ -126,9 +110,7 @@ def _image_row(subfig, m, rows, normal_clamp, letter):
 
 def _scatter_row(subfig, rows):
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import FormatStrFormatter, LogLocator
-
-    from ._common import SCENE_NAMES
+    from ._common import SCENE_NAMES, log_log
 
     axes = subfig.subplots(1, 3)
     specs = [("ms", "rmse_ref", "(c) error against the converged screen-space VO, over time",
@@ -154,16 +136,10 @@ def _scatter_row(subfig, rows):
                     if a in by and b in by:
                         ax.plot([by[a][xkey], by[b][xkey]], [by[a][ykey], by[b][ykey]], color="0.75",
                                 lw=0.8, ls="--" if nc else "-", zorder=1)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        for axis in (ax.xaxis, ax.yaxis):
-            axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-            axis.set_major_formatter(FormatStrFormatter("%g"))
-            axis.set_minor_formatter(FormatStrFormatter(""))
+        log_log(ax)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=11)
-        ax.grid(True, which="both", color="0.9", lw=0.6)
     configs = list(dict.fromkeys(r["config"] for r in rows))
     handles = [Line2D([], [], ls="", marker="o", ms=8, color=_COLORS.get(c, "0.4"), label=c) for c in configs]
     handles += [Line2D([], [], ls="", marker=_MARKERS.get(s, "^"), ms=8, mfc="0.3", mec="0.3",
@@ -176,5 +152,3 @@ def _scatter_row(subfig, rows):
     subfig.legend(handles=handles, loc="outside lower center", ncol=6, fontsize=9.5, frameon=False)
 
 
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

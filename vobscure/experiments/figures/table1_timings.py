@@ -12,7 +12,7 @@ Rows of the table:
 - the paper's, :data:`PAPER_TABLE1` (Dragon, Dragon with double radii, Cornell, Soldiers,
   Knight and the average over the four single-radius scenes; the bilateral blur's median
   2.23 ms, :data:`PAPER_BLUR_MS`, in the average row);
-- this library's, at :data:`PAPER_RESOLUTION` (1024 x 1024; 48 x 48 with ``quick``): the
+- this library's, at :data:`PAPER_RESOLUTION` (1024 x 1024; 48 x 48 in the quick profile): the
   Cornell box and the blob through their own cameras, radius 0.1 x the scene's extent
   (:data:`vobscure.experiments.common.RADIUS_FRACTION`), and the Cornell box with dual
   radii (each estimator run at the two radii of
@@ -33,15 +33,11 @@ Bavoil, Sainz & Dimitrov 2008, the registry's 8 directions of 4 nearest taps, 32
 not have: points with a one-texel ``nearest`` fetch (GPU bilinear fetches are free, NumPy's
 are not) and one area sample (``vo_area``, Fig. 1 of the paper). The dual-radius row times
 the VO columns only (the paper's Dragon* has no HSAO entry). Every time is the median of 3
-runs after a warm-up (1 with ``quick``), round-robin over the configurations of a scene, so
+runs after a warm-up (1 in the quick profile), round-robin over the configurations of a scene, so
 every ratio of a row divides two times of the same run.
 
-Regenerate with::
-
-    python -c "from vobscure.experiments.figures import table1_timings as f; f.make('docs/img')"
-
-(39 s on 2 shared cores at commit cd1976d; ``quick=True`` in seconds, where the times are
-dominated by per-call overhead and say little).
+Regenerate with ``vobscure figures table1_timings --out docs/img`` (39 s on 2 shared cores;
+``--quick`` in seconds, where the times are dominated by per-call overhead and say little).
 
 References
 ----------
@@ -50,17 +46,15 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 5.1 and Table 1.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["make", "FILENAME", "CSV_FILENAME", "CSV_RANGES", "PAPER_TABLE1", "PAPER_BLUR_MS",
-           "PAPER_RESOLUTION", "COLUMNS", "HORIZON_COLUMNS", "BASELINE", "TIMING_RUNS", "paper_ratios"]
+from ._common import Rows
 
-#: Name of the PNG :func:`make` writes.
-FILENAME = "table1_timings.png"
-#: Name of the CSV (one row per table cell).
-CSV_FILENAME = "table1_timings.csv"
+__all__ = ["measure", "plot", "PAPER_TABLE1", "PAPER_BLUR_MS",
+           "PAPER_RESOLUTION", "COLUMNS", "HORIZON_COLUMNS", "BASELINE", "paper_ratios"]
+
+ORDER = 70
+FIGSIZE = (21.0, 11.5)
 
 #: Loos & Sloan 2010, Table 1: milliseconds per pass at 1024 x 1024 on an NVIDIA QuadroFX
 #: 4800 ("Geometry" is the G-buffer pass; "Dragon (double radius)" used two radii and is not
@@ -93,11 +87,6 @@ COLUMNS = ("G-buffer", "lines 5", "lines 9", "points 12", "points 33", "HSAO", "
 HORIZON_COLUMNS = ("hbao 8x4", "gtao 3x3")
 #: The configuration every ratio is relative to.
 BASELINE = "points 12"
-#: Timed runs per configuration after a warm-up, (full, quick); the median is reported.
-TIMING_RUNS = {False: 3, True: 1}
-#: Range of each numeric CSV column (the tests check every row against it).
-CSV_RANGES = {"ms": (0.0, 1e7), "ratio": (0.0, 1e5), "baseline_ms": (0.0, 1e7),
-              "width": (1, 100000), "height": (1, 100000)}
 
 _SCENES = ("cornell_box", "blob")
 _DUAL_SCENE = "cornell_box"
@@ -131,57 +120,46 @@ def paper_ratios() -> dict:
     return out
 
 
-def make(out_dir, quick: bool = False, *, size=None, seed: int = 0, normal_clamp: bool = False,
-         runs: int | None = None) -> list[Path]:
-    """Time this library's passes, write ``table1_timings.png`` and ``table1_timings.csv``.
+def measure(profile, *, normal_clamp: bool = False) -> Rows:
+    """Time this library's passes; the paper's cells and ours, one row per cell.
 
     Parameters
     ----------
-    out_dir : str or path-like
-        Directory to write into; created if missing.
-    quick : bool, optional
-        48 x 48 pixels (seconds), for CI; the ratios then mostly measure call overhead.
-    size : (int, int), optional
-        Image size of this library's rows; default the paper's 1024 x 1024.
-    seed : int, optional
-        Seed of the estimators' noise textures.
+    profile : Profile
+        Quick: ``profile.size`` (48 x 48: the ratios then mostly measure call overhead) and
+        one timed run after the warm-up; full: the paper's 1024 x 1024 and 3 runs (the
+        median is reported). Seed of the estimators' noise textures: ``profile.seed``.
     normal_clamp : bool, optional
         Passed to every estimator (the paper does not say; default the estimators' default).
-    runs : int, optional
-        Timed runs per configuration; default :data:`TIMING_RUNS` (3, 1 with ``quick``).
 
     Returns
     -------
-    list of Path
-        ``[out_dir / FILENAME, out_dir / CSV_FILENAME]``, each written atomically. The CSV
-        has one row per filled cell: ``source`` ("paper" or "vobscure"), ``row``,
-        ``column``, ``width``, ``height``, ``ms``, ``baseline_ms`` (the row's ``points 12``)
-        and ``ratio`` = ms / baseline_ms.
-
-    Examples
-    --------
-    >>> from vobscure.experiments.figures import table1_timings
-    >>> table1_timings.FILENAME
-    'table1_timings.png'
+    Rows
+        One row per filled cell: ``source`` ("paper" or "vobscure"), ``row``, ``column``,
+        ``width``, ``height``, ``ms``, ``baseline_ms`` (the row's ``points 12``) and ``ratio`` =
+        ms / baseline_ms.
     """
-    from ..common import new_figure
-    from ._common import size_for, write_figure
+    size = profile.pick(profile.size, PAPER_RESOLUTION)
+    runs = profile.pick(1, 3)
+    ours = _measure(size, profile.seed, bool(normal_clamp), runs)
+    return Rows(_csv_rows(ours, size), columns=_CSV_COLUMNS,
+                meta={"size": list(size), "runs": runs, "quick": profile.quick})
 
-    quick = bool(quick)
-    size = size_for(quick, size, full=PAPER_RESOLUTION)
-    runs = TIMING_RUNS[quick] if runs is None else int(runs)
-    ours = _measure(size, seed, bool(normal_clamp), runs)
-    rows = _csv_rows(ours, size)
 
-    fig = new_figure(21.0, 11.5)
+def plot(rows, fig) -> None:
+    """(a) the table, (b) its ratios as bars, from :func:`measure`'s rows."""
+    ours = {}
+    for r in rows:
+        if r["source"] == "vobscure":
+            ours.setdefault(r["row"], {})[r["column"]] = r["ms"] / 1000.0
+    size, runs = rows.meta["size"], rows.meta["runs"]
     parts = fig.subfigures(2, 1, height_ratios=[1.15, 1.0], hspace=0.03)
     _table(parts[0], ours, size, runs)
     _bars(parts[1], ours)
     w, h = size
     fig.suptitle(f"Loos & Sloan 2010, Table 1: time per pass as a ratio to points 12 of the same row "
                  f"(paper: QuadroFX 4800, 1024 x 1024; vobscure: NumPy on this CPU, {w} x {h}"
-                 f"{', quick' if quick else ''})", fontsize=13)
-    return write_figure(fig, out_dir, FILENAME, rows, CSV_FILENAME, _CSV_COLUMNS)
+                 f"{', quick' if rows.meta['quick'] else ''})", fontsize=13)
 
 
 # ----------------------------------------------------------------------------- data
