@@ -204,3 +204,88 @@ def test_flicker_bad_inputs_name_the_argument():
         vo.metrics.flicker(np.zeros((3, 4, 4)), mask=np.ones((4, 5), bool))
     with pytest.raises(ValueError, match="mask"):
         vo.metrics.flicker(np.zeros((3, 4, 4)), mask=np.ones((4, 4)))
+
+
+# ----------------------------------------------------------------------------- point models
+def test_correlation_matches_scipy_and_ignores_nan_pairs():
+    from scipy import stats
+
+    from vobscure.metrics import correlation
+
+    rng = np.random.default_rng(3)
+    a = rng.random(50)
+    b = a + rng.normal(0, 0.3, 50)
+    assert correlation(a, b) == pytest.approx(stats.pearsonr(a, b).statistic, rel=1e-12)
+    a_nan, b_nan = a.copy(), b.copy()
+    a_nan[3], b_nan[7] = np.nan, np.inf
+    keep = np.ones(50, bool)
+    keep[[3, 7]] = False
+    assert correlation(a_nan, b_nan) == pytest.approx(stats.pearsonr(a[keep], b[keep]).statistic, rel=1e-12)
+
+
+@pytest.mark.parametrize("a, b", [([0.5, 0.5, 0.5, 0.5], [0.1, 0.2, 0.3, 0.4]),   # a constant model
+                                  ([0.1, 0.2, 0.3], [0.7, 0.7, 0.7]),             # a constant reference
+                                  ([0.1, 0.2], [0.3, 0.5])])                      # too few pairs
+def test_correlation_is_nan_where_undefined(a, b):
+    from vobscure.metrics import correlation
+
+    assert np.isnan(correlation(a, b))
+
+
+def test_calibration_rmse_hand_made_and_its_limits():
+    """Three bins of two points by hand; one bin is the |bias|, one point a bin the RMSE, and
+    in between it never exceeds the RMSE (Cauchy-Schwarz)."""
+    from vobscure.metrics import calibration_rmse
+
+    m = [0.9, 0.1, 0.5, 0.2, 0.6, 1.0]         # sorted: 0.1 0.2 | 0.5 0.6 | 0.9 1.0
+    r = [0.7, 0.3, 0.6, 0.2, 0.6, 1.0]         # their references: 0.3 0.2 | 0.6 0.6 | 0.7 1.0
+    # bin mean differences: 0.15 - 0.25, 0.55 - 0.6, 0.95 - 0.85
+    want = np.sqrt(2 * (0.1 ** 2 + 0.05 ** 2 + 0.1 ** 2) / 6)
+    assert calibration_rmse(m, r, bins=3) == pytest.approx(want, rel=1e-12)
+    rng = np.random.default_rng(4)
+    a, b = rng.random(101), rng.random(101)
+    rmse = np.sqrt(np.mean((a - b) ** 2))
+    assert calibration_rmse(a, b, bins=1) == pytest.approx(abs(np.mean(a - b)), rel=1e-12)
+    assert calibration_rmse(a, b, bins=101) == pytest.approx(rmse, rel=1e-12)
+    assert calibration_rmse(a, b, bins=500) == pytest.approx(rmse, rel=1e-12)   # capped at n
+    assert 0 <= calibration_rmse(a, b) <= rmse
+    with pytest.raises(ValueError, match="bins"):
+        calibration_rmse(a, b, bins=0)
+    with pytest.raises(ValueError, match="reference"):
+        calibration_rmse(a, b[:-1])
+
+
+# ----------------------------------------------------------------------------- ray counts
+def test_equal_error_rays_interpolates_and_extrapolates():
+    """RMSE halving per 4x rays is the line log RMSE = log 0.4 - (1/2) log rays: 0.1 at 16
+    rays, 0.1 / sqrt(2) at 32 (between points), 0.4 at 1 ray (beyond the measured end)."""
+    from vobscure.metrics import equal_error_rays
+
+    rays, rmse = [4, 16, 64], [0.2, 0.1, 0.05]
+    r, extra = equal_error_rays(rays, rmse, 0.1)
+    assert not extra and r == pytest.approx(16.0, rel=1e-12)
+    r, extra = equal_error_rays(rays, rmse, 0.1 / np.sqrt(2))
+    assert not extra and r == pytest.approx(32.0, rel=1e-12)
+    r, extra = equal_error_rays(rays, rmse, 0.4)
+    assert extra and r == pytest.approx(1.0, rel=1e-12)
+    r, extra = equal_error_rays(rays, rmse, 0.025)
+    assert extra and r == pytest.approx(256.0, rel=1e-12)
+    # a flat curve extrapolates with the Monte Carlo slope -1/2: 4x the rays for half the error
+    r, extra = equal_error_rays([4, 16], [0.2, 0.2], 0.1)
+    assert extra and r == pytest.approx(64.0, rel=1e-12)
+    with pytest.raises(ValueError, match="increasing"):
+        equal_error_rays([16, 4], [0.1, 0.2], 0.1)
+    with pytest.raises(ValueError, match="positive"):
+        equal_error_rays([4, 16], [0.1, 0.0], 0.1)
+
+
+def test_equal_error_rays_is_monotone_on_a_curve_that_rises_once():
+    """A noisy measured curve may rise once; the answer is still one count per target, and
+    never more rays for a larger error."""
+    from vobscure.metrics import equal_error_rays
+
+    rays, rmse = [4, 8, 16, 32, 64], [0.2, 0.1, 0.12, 0.06, 0.03]
+    counts = [equal_error_rays(rays, rmse, t)[0] for t in np.geomspace(0.02, 0.3, 60)]
+    assert np.all(np.diff(counts) <= 1e-9 * np.maximum(counts[:-1], 1.0))
+    # between 8 and 16 rays the running minimum is flat at 0.1: 0.1 is reached at 8 rays
+    assert equal_error_rays(rays, rmse, 0.1)[0] == pytest.approx(8.0, rel=1e-12)

@@ -24,6 +24,7 @@ from vobscure.trees import (
     canopy_visibility,
     chord_length,
     fit_density,
+    fit_reeves_blau,
     optical_depth,
     predict_density,
     reeves_blau,
@@ -40,6 +41,9 @@ QUAD = 1e-7
 FLOAT32 = 2e-6
 #: A noise-free fit recovers the density to this relative error.
 FIT_EXACT = 1e-9
+#: Reeves-Blau's k is fitted by Brent to 1e-6 in log k: a noise-free fit recovers k to
+#: about that relative error (2e-6 leaves room for the bracket's end).
+FIT_K = 2e-6
 
 
 def _rotation(seed=0):
@@ -567,7 +571,7 @@ def test_fit_density_is_no_worse_than_a_grid_search_when_depths_span_decades(den
     """Points at the shell's rim (normal outward, 1e-5 inside) have optical depths ~3e-10,
     so the log-density search spans 30 decades, most of it a plateau where every interior
     point reads 0: the fit must still find the interior minimum (a bounded search over the
-    whole range landed on the plateau, density ~1e8, at these settings). A grid search over
+    whole range lands on the plateau, density ~1e8, at these settings). A grid search over
     the whole range is the independent check."""
     from vobscure.trees import optical_depth
 
@@ -586,3 +590,78 @@ def test_fit_density_is_no_worse_than_a_grid_search_when_depths_span_decades(den
     grid = np.exp(np.linspace(np.log(1e-3), np.log(1e12), 4001))
     assert loss(a) <= min(loss(d) for d in grid) * (1 + 1e-9)
     assert a == pytest.approx(density, rel=0.1)
+
+
+def _points_with_optical_depths(tau):
+    """Points of the unit sphere's equatorial plane at distance D from the centre, normal
+    (0, 1, 0): h = R = 1, V_cap = 2 pi / 3 (Eq. 4), d = D, f = 1 / (1 + D^2) (Eq. 5), so
+    tau = (2 pi / 3) / (1 + D^2) for D = sqrt(2 pi / (3 tau) - 1)."""
+    D = np.sqrt(2 * np.pi / (3 * np.asarray(tau, float)) - 1)
+    x = np.column_stack([D, np.zeros_like(D), np.zeros_like(D)])
+    return x, np.tile([0.0, 1.0, 0.0], (len(D), 1))
+
+
+def test_fit_density_finds_the_deeper_of_two_dips_decades_apart():
+    """Two groups whose optical depths lie 47 decades apart, each fitted exactly by its own
+    density: four points with tau_B = 5e-14 and reference 0.1 (exact at a_B = ln 10 / tau_B)
+    and three with tau_A = 5e-61 and reference 0.9 (exact at a_A = ln(10 / 9) / tau_A). At
+    a_B the A points read exp(-a_B tau_A) = 1 - 2e-47, so the loss is 3 (1 - 0.9)^2 = 0.03;
+    at a_A the B points read 0, a loss of 4 (0.1)^2 = 0.04: the least-squares density is a_B.
+    The range of log(density) is 130 wide here; a fixed count of grid points over it steps
+    over the dip at a_B (its grid loss reads above the plateau's 0.04) and returns a_A."""
+    s = Sphere((0, 0, 0), 1.0)
+    tau_want = np.array([5e-14] * 4 + [5e-61] * 3)
+    x, n = _points_with_optical_depths(tau_want)
+    tau = optical_depth(x, n, s)
+    np.testing.assert_allclose(tau, tau_want, rtol=EXACT)
+    v = np.array([0.1] * 4 + [0.9] * 3)
+    a_B = np.log(10.0) / tau[0]
+    assert fit_density(x, n, s, v) == pytest.approx(a_B, rel=FIT_EXACT)
+
+
+@pytest.mark.parametrize("k", [0.05, 2.5, 300.0])
+def test_fit_reeves_blau_recovers_a_noise_free_k(k):
+    """Depths from the closed form (a sphere: R - |x - c|), the reference exp(-k depth)
+    written out here, not through reeves_blau."""
+    rng = np.random.default_rng(4)
+    s = Sphere((1.0, 2.0, 0.0), 2.0)
+    r = 2.0 * rng.uniform(0, 1, 300) ** (1 / 3)
+    x = s.center + r[:, None] * _unit(rng.normal(size=(300, 3)))
+    depth = 2.0 - r
+    assert fit_reeves_blau(x, s, np.exp(-k * depth)) == pytest.approx(k, rel=FIT_K)
+
+
+def test_fit_reeves_blau_weights_and_a_noisy_reference():
+    """Weights that zero out a corrupted half recover k from the clean half; with noise the
+    fit is no worse than a dense grid over the search range (an independent minimizer)."""
+    rng = np.random.default_rng(5)
+    s = Sphere((0, 0, 0), 1.0)
+    x = rng.uniform(-0.55, 0.55, (200, 3))
+    depth = 1.0 - np.linalg.norm(x, axis=1)
+    v = np.exp(-1.7 * depth)
+    v_bad = v.copy()
+    v_bad[::2] = 1.0
+    w = np.ones(200)
+    w[::2] = 0.0
+    assert fit_reeves_blau(x, s, v_bad, weights=w) == pytest.approx(1.7, rel=FIT_K)
+    noisy = np.clip(v + rng.normal(0, 0.05, 200), 0, 1)
+    k = fit_reeves_blau(x, s, noisy)
+
+    def loss(kk):
+        return float(np.sum((np.exp(-kk * depth) - noisy) ** 2))
+
+    grid = np.geomspace(1e-4, 1e4, 20001)
+    assert loss(k) <= min(loss(g) for g in grid) * (1 + 1e-9)
+
+
+def test_fit_reeves_blau_errors():
+    s = Sphere((0, 0, 0), 1.0)
+    x = np.zeros((3, 3))
+    with pytest.raises(ValueError, match="reference"):
+        fit_reeves_blau(x, s, np.ones(2))
+    with pytest.raises(ValueError, match="reference"):
+        fit_reeves_blau(x, s, [1.0, np.nan, 1.0])
+    with pytest.raises(ValueError, match="weights"):
+        fit_reeves_blau(x, s, np.ones(3), weights=[1.0, -1.0, 1.0])
+    with pytest.raises(ValueError, match="shell"):
+        fit_reeves_blau(x, "sphere", np.ones(3))

@@ -5,6 +5,10 @@
   into sampling, screen-space and model error, which add up to the total per pixel.
 - :func:`flicker`: the mean absolute frame-to-frame change of an animated estimate, less
   that of its reference.
+- :func:`correlation` and :func:`calibration_rmse`: how well a model's values order and
+  predict on average a reference's, point by point.
+- :func:`equal_error_rays`: the ray count at which a ray cast's measured error curve
+  reaches a given error.
 
 NaN policy: a pixel that is NaN (or inf) in any input (background, by the library's
 convention) is ignored, and the result says how many pixels were ignored.
@@ -12,17 +16,23 @@ convention) is ignored, and the result says how many pixels were ignored.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ._validate import as_array
+from ._validate import as_array, check_int
 
 __all__ = ["ErrorReport", "error", "TermSummary", "Decomposition", "decompose",
-           "Flicker", "flicker"]
+           "Flicker", "flicker", "correlation", "calibration_rmse", "equal_error_rays"]
 
 #: SSIM's default Gaussian-free window (scikit-image): 7 x 7, shrunk to fit small images.
 SSIM_WINDOW = 7
+#: Equal-count bins of the model's value in :func:`calibration_rmse`.
+CALIBRATION_BINS = 10
+#: Steepest slope :func:`equal_error_rays` extrapolates with (log RMSE per log rays): a
+#: flatter measured curve would send the extrapolated ray count to infinity.
+FLATTEST_SLOPE = -1e-3
 
 
 @dataclass(frozen=True)
@@ -419,3 +429,139 @@ def flicker(frames, reference_frames=None, *, mask=None) -> Flicker:
     ref = float(np.mean(np.abs(R[1:][use] - R[:-1][use]))) if R is not None else nan
     return Flicker(value=est - ref if R is not None else est, estimate_change=est,
                    reference_change=ref, pairs=n, ignored=ignored)
+
+
+# ----------------------------------------------------------------------------- point models
+def _finite_pairs(a, b, names: tuple[str, str]) -> tuple[np.ndarray, np.ndarray]:
+    x = as_array(a, names[0], shape=(None,), finite=False)
+    y = as_array(b, names[1], shape=(x.shape[0],), finite=False)
+    use = np.isfinite(x) & np.isfinite(y)
+    return x[use], y[use]
+
+
+def correlation(model, reference) -> float:
+    """Pearson's correlation coefficient r of a model's values and a reference's.
+
+    Parameters
+    ----------
+    model, reference : (n,) array_like
+        Values at the same n points; a pair with NaN (or inf) in either is ignored.
+
+    Returns
+    -------
+    float
+        r in [-1, 1]; NaN where it is undefined: fewer than 3 pairs, or either side constant
+        (a model with no parameter effect, e.g. visibility 1 everywhere).
+
+    Examples
+    --------
+    >>> round(correlation([0.1, 0.4, 0.5, 0.9], [0.2, 0.5, 0.4, 1.0]), 6)
+    0.955975
+    >>> correlation([1.0, 1.0, 1.0], [0.2, 0.5, 0.4])
+    nan
+    """
+    a, b = _finite_pairs(model, reference, ("model", "reference"))
+    if len(a) < 3 or np.ptp(a) == 0 or np.ptp(b) == 0:      # a constant side: r is 0 / 0
+        return float("nan")
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def calibration_rmse(model, reference, *, bins: int = CALIBRATION_BINS) -> float:
+    r"""The error of a model as a predictor of the *average* reference value of the points it
+    gives about one value.
+
+    The points are sorted by the model's value and split into ``bins`` groups of equal count
+    (``numpy.array_split``; the first groups one larger); the result is the RMSE of the
+    groups' model means against their reference means, each group weighted by its count:
+    :math:`\sqrt{\sum_g n_g (\bar m_g - \bar r_g)^2 / n}`. It leaves out the
+    point-to-point scatter that no function of the model's inputs can follow (for a canopy
+    model: Hegeman's ensemble mean :math:`\langle V \rangle`, Sec. 3), so it never exceeds
+    the RMSE (Cauchy-Schwarz, group by group).
+
+    Parameters
+    ----------
+    model, reference : (n,) array_like
+        Values at the same n points; a pair with NaN (or inf) in either is ignored.
+    bins : int, keyword-only
+        Number of groups (at most the number of points), >= 1.
+
+    Returns
+    -------
+    float
+        >= 0; NaN when no pair is finite.
+
+    Examples
+    --------
+    >>> m, r = [1.0, 2.0, 5.0, 6.0], [2.0, 1.0, 6.0, 5.0]
+    >>> calibration_rmse(m, r, bins=2)     # bin means 1.5 and 5.5 on both sides
+    0.0
+    >>> calibration_rmse(m, r, bins=4)     # one point a bin: the RMSE
+    1.0
+    """
+    bins = check_int(bins, "bins")
+    model, t = _finite_pairs(model, reference, ("model", "reference"))
+    if len(model) == 0:
+        return float("nan")
+    order = np.argsort(model, kind="stable")
+    groups = np.array_split(order, min(bins, len(order)))
+    sq = sum(len(g) * (model[g].mean() - t[g].mean()) ** 2 for g in groups if len(g))
+    return float(np.sqrt(sq / len(model)))
+
+
+# ----------------------------------------------------------------------------- ray counts
+def equal_error_rays(rays, rmse, target) -> tuple[float, bool]:
+    """Rays per point at which the ray cast's RMSE equals ``target``, by linear interpolation of
+    log RMSE against log rays.
+
+    The measured RMSE is made non-increasing first (a running minimum), so the answer is
+    monotone (non-increasing) in ``target``. Outside the measured range the line through the
+    nearer end point, with the slope fitted to all points (least squares in log-log, at most
+    ``FLATTEST_SLOPE``), is extrapolated; a curve with no change at all extrapolates with
+    the Monte Carlo slope -1/2.
+
+    Parameters
+    ----------
+    rays : sequence of int
+        Increasing ray counts.
+    rmse : sequence of float
+        The ray cast's RMSE at each count (> 0).
+    target : float
+        The RMSE to match (> 0).
+
+    Returns
+    -------
+    rays : float
+        The equal-error ray count (not rounded).
+    extrapolated : bool
+        Whether ``target`` lay outside the measured RMSE range.
+
+    Raises
+    ------
+    ValueError
+        Fewer than two counts, counts not increasing, one RMSE per count missing, or an RMSE
+        or ``target`` that is not positive.
+
+    Examples
+    --------
+    >>> rays, extrapolated = equal_error_rays([4, 16, 64], [0.2, 0.1, 0.05], 0.1)
+    >>> round(rays, 6), extrapolated
+    (16.0, False)
+    >>> rays, extrapolated = equal_error_rays([4, 16], [0.2, 0.1], 0.05)   # slope -1/2 extended
+    >>> round(rays, 6), extrapolated
+    (64.0, True)
+    """
+    r = np.asarray(rays, dtype=np.float64)
+    e = np.minimum.accumulate(np.asarray(rmse, dtype=np.float64))
+    if r.ndim != 1 or len(r) < 2 or len(e) != len(r) or np.any(np.diff(r) <= 0):
+        raise ValueError("rays must be at least two increasing counts, one RMSE each")
+    if not np.all(e > 0) or not target > 0:
+        raise ValueError("RMSE values and target must be positive")
+    lr, le, lt = np.log(r), np.log(e), math.log(float(target))
+    slope = float(np.polyfit(lr, le, 1)[0]) if np.ptp(le) > 0 else -0.5
+    slope = min(slope, FLATTEST_SLOPE)
+    if lt > le[0]:
+        return float(math.exp(lr[0] + (lt - le[0]) / slope)), True
+    if lt < le[-1]:
+        return float(math.exp(lr[-1] + (lt - le[-1]) / slope)), True
+    # le is non-increasing: interpolate on the reversed (non-decreasing) arrays
+    return float(math.exp(np.interp(lt, le[::-1], lr[::-1]))), False

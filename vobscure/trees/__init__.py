@@ -2,10 +2,11 @@
 
 ``shells``: the spheres, ellipsoids and sets of shells that enclose a canopy, and their
 fits to a point cloud; ``canopy``: the canopy visibility of Eqs. 4-6, the Reeves-Blau
-baseline, and the density (alpha rho) fitted to a reference or predicted from leaf
-statistics; ``poisson``: the visibility a Poisson leaf cloud has in expectation (the chord
-transmittance integrated over the hemisphere, tabulated for spheres), the one implementation
-that the ``"porous"`` occluder model of ``occluders`` shares. See ``docs/trees.md``.
+baseline, the density (alpha rho) fitted to a reference or predicted from leaf statistics,
+and Reeves-Blau's k fitted to a reference; ``poisson``: the visibility a Poisson leaf cloud
+has in expectation (the chord transmittance integrated over the hemisphere, tabulated for
+spheres), the one implementation that the ``"porous"`` occluder model of ``occluders``
+shares. See ``docs/trees.md``.
 """
 
 from .shells import (
@@ -17,7 +18,14 @@ from .shells import (
     chord_length,
     shells_from_points,
 )
-from .canopy import canopy_visibility, fit_density, optical_depth, predict_density, reeves_blau
+from .canopy import (
+    canopy_visibility,
+    fit_density,
+    fit_reeves_blau,
+    optical_depth,
+    predict_density,
+    reeves_blau,
+)
 from .poisson import extinction, poisson_quadrature, poisson_visibility, sphere_transmittance
 from .occluders import grass_visibility, occluder_visibility, sphere_occlusion
 
@@ -30,6 +38,7 @@ __all__ = [
     "canopy_visibility",
     "chord_length",
     "fit_density",
+    "fit_reeves_blau",
     "optical_depth",
     "predict_density",
     "reeves_blau",

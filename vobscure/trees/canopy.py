@@ -30,7 +30,8 @@ from ._arrays import as_raw_points, out_dtype
 from .poisson import extinction
 from .shells import Ellipsoid, MultiShell, Sphere
 
-__all__ = ["canopy_visibility", "reeves_blau", "fit_density", "predict_density", "optical_depth"]
+__all__ = ["canopy_visibility", "reeves_blau", "fit_density", "fit_reeves_blau", "predict_density",
+           "optical_depth"]
 
 #: Points evaluated at once by ``canopy_visibility``: bounds the temporaries (about
 #: 30 float64 values per point, 15 MiB) whatever the number of points.
@@ -43,8 +44,19 @@ FIT_TAU_MAX = 50.0
 #: Gauss-Newton polish of the fitted density: stop once a step is this small relative.
 FIT_RTOL = 1e-14
 FIT_MAX_STEPS = 50
-#: Points of the coarse log-density grid that brackets the fit's search.
+#: Fewest points of the log-density grid that brackets the fit's search.
 FIT_GRID = 241
+#: Largest step of that grid in log(density). One point's visibility exp(-density tau) falls
+#: from 0.9 to 0.1 while log(density) grows by log(ln 10 / ln(10 / 9)) = 3.1, so every
+#: dip of the loss is at least about that wide; a step of 0.25 puts a dozen grid points in
+#: it. Optical depths over many decades widen the range (up to ~1500 in log), and a fixed
+#: count of FIT_GRID points would step over a dip and pick a worse one.
+FIT_GRID_STEP = 0.25
+#: Bounds of log(k) in the fit of Reeves-Blau's k (k in 1/length; the scenes are metres-ish),
+#: the points of its log-spaced grid and the Brent tolerance in log(k).
+LOG_K_BOUNDS = (math.log(1e-4), math.log(1e4))
+K_GRID = 33
+K_XATOL = 1e-6
 #: Normals shorter than this are rejected (they have no direction).
 ZERO_NORMAL = 1e-12
 
@@ -295,7 +307,20 @@ def reeves_blau(points, shell, *, k: float) -> np.ndarray:
     return out
 
 
-# ----------------------------------------------------------------------------- density
+# ----------------------------------------------------------------------------- fitting
+def _grid_then_brent(loss, grid: np.ndarray, *, xatol: float) -> tuple[float, float]:
+    """Minimize ``loss(s)`` over ``grid`` (increasing), then by a bounded Brent search between
+    the best grid point's neighbours; the grid point stays when Brent does not improve on it.
+    Returns (s, loss(s))."""
+    losses = [loss(g) for g in grid]
+    best = int(np.argmin(losses))
+    bracket = (grid[max(best - 1, 0)], grid[min(best + 1, len(grid) - 1)])
+    res = minimize_scalar(loss, bounds=bracket, method="bounded", options={"xatol": xatol})
+    if res.fun <= losses[best]:
+        return float(res.x), float(res.fun)
+    return float(grid[best]), float(losses[best])
+
+
 def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     r"""The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
 
@@ -323,12 +348,16 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
 
     Notes
     -----
-    One parameter, so it is searched directly: a bounded Brent minimization over
-    ``log(density)`` across the range where the optical depths run from ``FIT_TAU_MIN``
-    (everything open) to ``FIT_TAU_MAX`` (everything closed), which keeps the search
-    well-scaled where visibility is near 0; density 0 is compared as a candidate; then
-    Gauss-Newton steps polish the minimum (quadratic convergence on noise-free data). This is
-    the "simple one-time preprocessing step" that Sec. 4 of the paper leaves as future work.
+    One parameter, so it is searched directly over ``log(density)``, across the range where
+    the optical depths run from ``FIT_TAU_MIN`` (everything open) to ``FIT_TAU_MAX``
+    (everything closed), which keeps the search well-scaled where visibility is near 0.
+    The loss need not be unimodal there (points whose optical depths lie decades apart each
+    pull towards their own density, and the loss has a dip for each): a grid of at least
+    ``FIT_GRID`` points and at most ``FIT_GRID_STEP`` apart finds the deepest dip, a bounded
+    Brent search between the best grid point's neighbours its bottom; density 0 is compared
+    as a candidate; then Gauss-Newton steps polish the minimum (quadratic convergence on
+    noise-free data). This is the "simple one-time preprocessing step" that Sec. 4 of the
+    paper leaves as future work.
 
     References
     ----------
@@ -368,15 +397,10 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     lo = math.log(FIT_TAU_MIN / tau.max())
     hi = math.log(FIT_TAU_MAX / tau.min())
     # the loss has plateaus (all open, all closed) and, with optical depths spread over many
-    # decades, need not be unimodal in log(density): a coarse grid first, then a bounded
-    # search in the bracket around the grid's best point
-    grid = np.linspace(lo, hi, FIT_GRID)
-    losses = [loss(math.exp(g)) for g in grid]
-    k = int(np.argmin(losses))
-    bracket = (grid[max(k - 1, 0)], grid[min(k + 1, FIT_GRID - 1)])
-    res = minimize_scalar(lambda s: loss(math.exp(s)), bounds=bracket, method="bounded",
-                          options={"xatol": 1e-10})
-    a = math.exp(float(res.x)) if res.fun <= losses[k] else math.exp(float(grid[k]))
+    # decades, need not be unimodal in log(density): a grid fine enough to see every dip
+    # first, then a bounded search in the bracket around the grid's best point
+    grid = np.linspace(lo, hi, max(FIT_GRID, math.ceil((hi - lo) / FIT_GRID_STEP) + 1))
+    a = math.exp(_grid_then_brent(lambda s: loss(math.exp(s)), grid, xatol=1e-10)[0])
     if loss(0.0) < loss(a):
         a = 0.0
     for _ in range(FIT_MAX_STEPS):                                # Gauss-Newton on r(a) = exp(-a tau) - v
@@ -396,6 +420,70 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
             break
     return a
 
+
+
+def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
+    r"""The k of ``reeves_blau`` that best fits a reference (least squares), the counterpart
+    of ``fit_density`` for the Reeves-Blau baseline.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Shading points, finite.
+    shell : Sphere, Ellipsoid or MultiShell
+        As in ``reeves_blau``.
+    reference : (n,) float
+        The reference visibility at each point (a ground truth's ``value``), finite.
+    weights : (n,) float or None, keyword-only
+        Non-negative weights of the squared residuals (1 each by default).
+
+    Returns
+    -------
+    float
+        The k > 0 minimizing :math:`\sum w \, (e^{-k\,\text{depth}} -
+        \text{reference})^2`.
+
+    Raises
+    ------
+    ValueError
+        Shapes that disagree, NaN or inf in ``reference`` or ``weights``, negative
+        ``weights``, or a ``shell`` of another type.
+
+    Notes
+    -----
+    A 1-D least-squares fit of ``log k`` over ``LOG_K_BOUNDS`` (1e-4 to 1e4 per unit
+    length): the loss need not be unimodal over eight decades, so a grid of ``K_GRID``
+    log-spaced points first, then a bounded Brent search (tolerance ``K_XATOL`` in log k)
+    between the best grid point's neighbours. Reeves & Blau chose k by hand ("ad hoc",
+    Hegeman 2006, Fig. 4); fitting it gives the baseline its best chance.
+
+    References
+    ----------
+    Reeves & Blau 1985 (the attenuation ``exp(-k depth)``); Hegeman et al. 2006, Sec. 2 and
+    Fig. 4 (the comparison).
+
+    Examples
+    --------
+    >>> s = Sphere((0, 0, 0), 1.0)
+    >>> x = np.array([[0, 0, 0], [0, 0.5, 0], [0.2, 0.1, 0], [0, 0, 0.9]])
+    >>> round(fit_reeves_blau(x, s, reeves_blau(x, s, k=2.5)), 5)
+    2.5
+    """
+    _check_shell(shell)
+    P = as_array(as_raw_points(points, "points"), "points")
+    ref = as_array(reference, "reference", shape=(P.shape[0],))
+    if weights is None:
+        w = np.ones_like(ref)
+    else:
+        w = as_array(weights, "weights", shape=(P.shape[0],))
+        if np.any(w < 0):
+            raise ValueError("weights must be non-negative")
+
+    def loss(log_k):
+        return float(np.sum(w * (reeves_blau(points, shell, k=math.exp(log_k)) - ref) ** 2))
+
+    grid = np.linspace(*LOG_K_BOUNDS, K_GRID)
+    return float(math.exp(_grid_then_brent(loss, grid, xatol=K_XATOL)[0]))
 
 def predict_density(n_leaves: float, leaf_area: float, shell) -> float:
     r"""The alpha*rho predicted from leaf statistics by the Poisson argument of Sec. 3.

@@ -1,0 +1,86 @@
+"""What every measurement of :mod:`vobscure.experiments.trees` shares: the scenes, the two
+references, the sizes of a run, the ground truth and the scores of a model against it."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from ...metrics import correlation
+
+#: The scenes with a canopy (registered names of :func:`vobscure.scenes.get`): the sparse and
+#: dense leaf clouds of Fig. 2 and the two trees (apple-like, poplar-like) of Figs. 3-9.
+CANOPY_SCENES = ("leaf_cloud", "leaf_cloud_dense", "tree", "tree_poplar")
+
+#: The scenes with a tree standing on the ground (Fig. 9's ground points).
+TREE_SCENES = ("tree", "tree_poplar")
+
+#: The grass field of Fig. 10.
+GRASS_SCENE = "grass"
+
+#: The two hemisphere integrals the models are scored against: ``weighting`` of
+#: :func:`vobscure.groundtruth.ambient_occlusion`, with ``max_distance=inf``.
+REFERENCES = ("cosine", "uniform")
+
+#: Hegeman et al. 2006, Sec. 4: NVShaderPerf throughput of the three fragment shaders on a
+#: GeForce 6800 Ultra, megapixels per second.
+PAPER_MPS = {"hegeman": 460.0, "reeves_blau": 580.0, "ambient": 2300.0}
+
+#: Sizes of a run (full, quick): points sampled per scene (half fit, half scored), rays of the
+#: ground truth, ray counts of the convergence sweep, shells of the multi-shell fits, ring
+#: distances (bounding-sphere radii) and points per ring of Fig. 9, grass points, bins,
+#: points the models are timed on, and timing repeats.
+SETTINGS = {
+    False: {"points": 2048, "truth_rays": 1024, "rays": (4, 8, 16, 32, 64, 128, 256),
+            "multi_k": (2, 3, 4, 5), "rings": (0.15, 0.3, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5),
+            "ring_points": 64, "grass_points": 2048, "height_bins": 10, "cos_bins": 2,
+            "timing_points": 65536, "raycast_timing_points": 8192, "repeats": 3},
+    True: {"points": 96, "truth_rays": 64, "rays": (4, 8, 16),
+           "multi_k": (2, 4), "rings": (0.3, 1.0, 2.0), "ring_points": 8, "grass_points": 96,
+           "height_bins": 4, "cos_bins": 2, "timing_points": 4096, "raycast_timing_points": 96,
+           "repeats": 1},
+}
+
+
+def setting(quick: bool) -> dict:
+    """The sizes of a run (:data:`SETTINGS`), full or ``quick``."""
+    return dict(SETTINGS[bool(quick)])
+
+
+@lru_cache(maxsize=None)
+def _scene(name: str):
+    from ... import scenes
+
+    return scenes.get(name)
+
+
+def _truth(scene, points, normals, reference, rays, seed):
+    from ...groundtruth import ambient_occlusion
+
+    return ambient_occlusion(scene, points, normals, rays=rays, weighting=reference,
+                             max_distance=np.inf, seed=seed)
+
+
+def _or_none(value: float) -> float | None:
+    return None if np.isnan(value) else value
+
+
+def _scores(model, truth: "Estimate") -> dict:   # noqa: F821 - Estimate of vobscure.estimate
+    """RMSE, bias, MAE, Pearson r (None, an empty cell, where undefined: e.g. a constant
+    model, density 0), means and the truth's RMS stderr of ``model`` against it."""
+    model = np.asarray(model, dtype=np.float64)
+    t = np.asarray(truth.value, dtype=np.float64)
+    diff = model - t
+    return {"rmse": float(np.sqrt(np.mean(diff ** 2))), "bias": float(np.mean(diff)),
+            "mae": float(np.mean(np.abs(diff))), "corr": _or_none(correlation(model, t)),
+            "model_mean": float(np.mean(model)), "truth_mean": float(np.mean(t)),
+            "truth_stderr": float(np.sqrt(np.mean(np.asarray(truth.stderr, float) ** 2))),
+            "points": int(len(t))}
+
+
+def _sub(estimate, index):
+    from ...estimate import Estimate
+
+    return Estimate(value=np.asarray(estimate.value)[index], stderr=np.asarray(estimate.stderr)[index],
+                    samples=estimate.samples)
