@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 from scipy.spatial import cKDTree
+from analytic import crease_vo
 
 import vobscure as vo
 from vobscure.gbuffer import GBuffer
@@ -314,7 +315,7 @@ def _crease_rmse(gb, values, radius=1.0):
     floor = gb.valid & (wn[..., 1] > 0.99) & (wp[..., 0] <= radius) & (np.abs(wp[..., 2]) <= 4.0 - radius)
     mask = floor & inside
     c = wp[..., 0][mask] / radius
-    exact = 0.5 - (1 - c) ** 2 * (2 + c) / 8      # DESIGN.md, "Testing"
+    exact = crease_vo(c)
     return float(np.sqrt(np.mean((values[mask] - exact) ** 2))), int(mask.sum())
 
 

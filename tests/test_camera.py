@@ -784,7 +784,7 @@ def test_look_at_does_not_freeze_the_callers_arrays():
 
 # ---------------------------------------------------------------------------- pinhole cameras in the estimators
 #: Flat surfaces: the depth buffer holds Embree's float32 hits, so planes are exact to ~1e-5
-#: (as tests/test_screenspace.py). Measured here, off-centre principal points (one off the
+#: (as tests/test_line.py). Measured here, off-centre principal points (one off the
 #: image) and fx / fy in {0.5, 1, 1.7, 2}: max 6.1e-5 (area), 1.4e-5 (line), 0 (point).
 PLANE_TOL = 1e-3
 #: Crop invariance. Line and point read the same pixels with the same offsets (measured: 0,
@@ -1051,11 +1051,6 @@ def _area_plane_interior(gb, radius, samples):
     mx, my = r[..., 0] + 1.0 + support, r[..., 1] + 1.0 + support
     return (_plane_interior(gb, radius) & clean & (j + 0.5 - mx >= 0) & (j + 0.5 + mx <= W)
             & (i + 0.5 - my >= 0) & (i + 0.5 + my <= H))
-
-
-@pytest.fixture(scope="module")
-def big_slab():
-    return vo.scenes.slab(size=200.0)
 
 
 # (fx / fy, cx, cy) on a 64 x 48 image: principal points off-centre, one off the image

@@ -33,7 +33,7 @@ DEPTH_RTOL = {np.float64: 1e-9, np.float32: 5e-6}
 NORMAL_ATOL = {np.float64: 1e-12, np.float32: 1e-6}
 #: vo_line on the converted G-buffer against the original one. The estimate is continuous in
 #: the depths (line sampling intersects chords analytically), so it moves by about
-#: (depth error) / (2 R z_s) <= 1e-9 * 12 / 0.6 in float64; float32 as tests/test_screenspace.py
+#: (depth error) / (2 R z_s) <= 1e-9 * 12 / 0.6 in float64; float32 as tests/test_line.py
 #: (FLOAT32_TOL, 2e-6) plus the float32 depth error above (8.6e-6 / (2 * 0.77) = 6e-6).
 VO_ATOL = {np.float64: 1e-7, np.float32: 2e-5}
 #: Derived normals on the crease rendered at 96 x 72 (measured at this commit: median 2e-4

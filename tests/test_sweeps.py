@@ -78,7 +78,7 @@ def dask_client():
     distributed = pytest.importorskip("distributed", reason="dask[distributed] is not installed "
                                                             "(pip install 'vobscure[dask]')")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
+                                       dashboard_address=":0")
     client = distributed.Client(cluster)
     try:
         yield client
