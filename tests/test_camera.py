@@ -783,7 +783,9 @@ def test_parts_equal_only_their_own_kind():
     twin = Intrinsics(lens.fx, lens.fy, lens.cx, lens.cy, lens.size)
     np.testing.assert_array_equal(twin.project([0.3, -0.2, 2.0])[0], lens.project([0.3, -0.2, 2.0])[0])
     assert twin != lens and lens != twin
-    assert Orthographic(2.0, (40, 30)) != Perspective(60.0, (40, 30))
+    # the same parameter values (60, (40, 30)) mean a view height or a field of view by kind
+    assert Orthographic(60.0, (40, 30)) != Perspective(60.0, (40, 30))
+    assert hash(Orthographic(60.0, (40, 30))) != hash(Perspective(60.0, (40, 30)))
     # a lens, a pose and a camera never compare equal to each other
     parts = (lens, look.extrinsics, look)
     for a in parts:
