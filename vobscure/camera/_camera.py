@@ -219,10 +219,7 @@ class Camera(Frozen):
         Parameters
         ----------
         matrix, size, convention
-            As in :meth:`Intrinsics.from_matrix`: the (4, 4) projection matrix as written
-            mathematically, the viewport ``(width, height)`` in pixels, and ``"opengl"``
-            (default, ``glFrustum``, column vectors) or ``"directx"``
-            (``D3DXMatrixPerspectiveOffCenterLH``, row vectors).
+            As in :meth:`Intrinsics.from_matrix`.
         pose : (4, 4) float, optional
             View -> world matrix in vobscure's convention, as in :meth:`from_intrinsics`.
 
