@@ -776,6 +776,29 @@ def test_camera_is_a_pose_and_a_projection():
         assert cam.projection == cam.lens.name
 
 
+def test_parts_equal_only_their_own_kind():
+    look = Camera.look_at((1.0, 2.0, 3.0), (-0.5, 0.2, 0.1), size=(40, 30), fov_y=60.0)
+    lens = look.lens
+    # the same numbers in another kind of projection: the same pixels, not the same record
+    twin = Intrinsics(lens.fx, lens.fy, lens.cx, lens.cy, lens.size)
+    np.testing.assert_array_equal(twin.project([0.3, -0.2, 2.0])[0], lens.project([0.3, -0.2, 2.0])[0])
+    assert twin != lens and lens != twin
+    # the same parameter values (60, (40, 30)) mean a view height or a field of view by kind
+    assert Orthographic(60.0, (40, 30)) != Perspective(60.0, (40, 30))
+    assert hash(Orthographic(60.0, (40, 30))) != hash(Perspective(60.0, (40, 30)))
+    # a lens, a pose and a camera never compare equal to each other
+    parts = (lens, look.extrinsics, look)
+    for a in parts:
+        for b in parts:
+            assert (a == b) is (a is b)
+    assert lens.__eq__(look.extrinsics) is NotImplemented and look.__eq__(lens) is NotImplemented
+    # equal values of one kind are one element of a set, whatever the int / float spelling
+    assert len({Perspective(60, (40, 30)), Perspective(60.0, (40, 30)), lens}) == 1
+    for part, slot in zip(parts, ("_size", "_eye", "_pose")):
+        with pytest.raises(AttributeError, match=f"{type(part).__name__} is immutable; cannot delete"):
+            delattr(part, slot)
+
+
 def test_look_at_does_not_freeze_the_callers_arrays():
     eye = np.array([0.0, 0.0, 5.0])
     Camera.look_at(eye, (0, 0, 0), size=(4, 3))

@@ -8,6 +8,7 @@ import numpy as np
 
 from .._validate import check_choice, check_positive
 from ._checks import DEFAULT_FOV_Y, check_size, freeze, vector3
+from ._frozen import Frozen
 from .pose import Pose
 from .projection import Intrinsics, Orthographic, Perspective, Projection
 
@@ -26,7 +27,7 @@ def _no_pose_error(what: str) -> ValueError:
                       "(project, unproject, pixels_per_unit) work without it")
 
 
-class Camera:
+class Camera(Frozen):
     """An immutable pinhole (perspective) or orthographic camera: a :class:`Pose` and a
     :class:`Projection` of an image ``size``.
 
@@ -119,8 +120,7 @@ class Camera:
 
     def _compose(self, pose: Pose | None, lens: Projection) -> Camera:
         """Set the two slots (the one place that does); returns the camera."""
-        object.__setattr__(self, "_pose", pose)
-        object.__setattr__(self, "_lens", lens)
+        self._set_slots(_pose=pose, _lens=lens)
         return self
 
     @classmethod
@@ -218,13 +218,8 @@ class Camera:
 
         Parameters
         ----------
-        matrix : (4, 4) float
-            The projection matrix as written mathematically, ``matrix[row, column]``.
-        size : (2,) int
-            Viewport ``(width, height)`` in pixels.
-        convention : {"opengl", "directx"}
-            ``"opengl"`` (default, ``glFrustum``, column vectors) or ``"directx"``
-            (``D3DXMatrixPerspectiveOffCenterLH``, row vectors).
+        matrix, size, convention
+            As in :meth:`Intrinsics.from_matrix`.
         pose : (4, 4) float, optional
             View -> world matrix in vobscure's convention, as in :meth:`from_intrinsics`.
 
@@ -250,26 +245,12 @@ class Camera:
         lens = Intrinsics.from_matrix(matrix, size, convention=convention)
         return cls._of(None if pose is None else Pose(pose), lens)
 
-    # ------------------------------------------------------------------ immutability
-    def __setattr__(self, name, value):
-        raise AttributeError(f"Camera is immutable; cannot set {name!r}")
-
-    def __delattr__(self, name):
-        raise AttributeError(f"Camera is immutable; cannot delete {name!r}")
-
+    # ------------------------------------------------------------------ identity
     def __reduce__(self):
         return (_camera_from_dict, (self.to_dict(),))
 
     def _key(self):
         return tuple((k, freeze(v)) for k, v in self.to_dict().items())
-
-    def __eq__(self, other):
-        if not isinstance(other, Camera):
-            return NotImplemented
-        return self._key() == other._key()
-
-    def __hash__(self):
-        return hash(self._key())
 
     def __repr__(self) -> str:
         return self._lens.camera_repr(self._pose)

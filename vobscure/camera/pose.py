@@ -12,6 +12,7 @@ import numpy as np
 
 from .._validate import as_array
 from ._checks import EYE_TARGET_RTOL, POSE_ORTHO_TOL, UP_PARALLEL_TOL, vector3
+from ._frozen import Frozen, read_only, vector_repr
 
 __all__ = ["Pose"]
 
@@ -38,7 +39,7 @@ def _check_matrix(matrix) -> np.ndarray:
     return m
 
 
-class Pose:
+class Pose(Frozen):
     """An immutable camera pose (camera-to-world): the eye and the view axes in world space.
 
     Build one with :meth:`look_at` (an eye, a target and an up hint) or from a 4x4
@@ -95,12 +96,11 @@ class Pose:
         matrix[:3, :3] = rotation.T
         matrix[:3, 3] = eye
         matrix[3, 3] = 1.0
-        set_ = object.__setattr__
-        for name, value in (("_eye", eye), ("_target", target), ("_up_hint", up_hint), ("_forward", forward),
-                            ("_right", right), ("_up", up), ("_rotation", rotation), ("_matrix", matrix)):
+        arrays = {"_eye": eye, "_target": target, "_up_hint": up_hint, "_forward": forward, "_right": right,
+                  "_up": up, "_rotation": rotation, "_matrix": matrix}
+        for value in arrays.values():
             value.setflags(write=False)
-            set_(self, name, value)
-        set_(self, "_is_look_at", is_look_at)
+        self._set_slots(**arrays, _is_look_at=is_look_at)
 
     @classmethod
     def look_at(cls, eye, target, up=(0.0, 1.0, 0.0)) -> Pose:
@@ -154,15 +154,8 @@ class Pose:
         return pose
 
     # ------------------------------------------------------------------ attributes
-    eye = property(lambda self: self._eye, doc="(3,) world-space camera position.")
-    target = property(lambda self: self._target, doc="(3,) look-at point (``eye + forward`` from a matrix).")
-    up_hint = property(lambda self: self._up_hint, doc="(3,) the up hint as given (``up`` from a matrix).")
-    forward = property(lambda self: self._forward, doc="(3,) unit view direction (view +z).")
-    right = property(lambda self: self._right, doc="(3,) unit view +x.")
-    up = property(lambda self: self._up, doc="(3,) unit view +y.")
-    rotation = property(lambda self: self._rotation, doc="(3, 3) world -> view, rows (right, up, forward).")
-    matrix = property(lambda self: self._matrix, doc="(4, 4) view -> world, columns (right, up, forward, eye).")
-    is_look_at = property(lambda self: self._is_look_at, doc="Built by :meth:`look_at`.")
+    eye, target, up_hint, forward, right, up, rotation, matrix, is_look_at = read_only(
+        "eye", "target", "up_hint", "forward", "right", "up", "rotation", "matrix", "is_look_at")
 
     # ------------------------------------------------------------------ transforms
     def world_to_view(self, points) -> np.ndarray:
@@ -220,12 +213,6 @@ class Pose:
                     "up": [float(x) for x in self._up_hint]}
         return {"pose": [[float(x) for x in row] for row in self._matrix]}
 
-    def __setattr__(self, name, value):
-        raise AttributeError(f"Pose is immutable; cannot set {name!r}")
-
-    def __delattr__(self, name):
-        raise AttributeError(f"Pose is immutable; cannot delete {name!r}")
-
     def __reduce__(self):
         if self._is_look_at:
             return (Pose.look_at, (self._eye, self._target, self._up_hint))
@@ -234,18 +221,8 @@ class Pose:
     def _key(self):
         return tuple((k, tuple(map(tuple, v)) if k == "pose" else tuple(v)) for k, v in self.to_dict().items())
 
-    def __eq__(self, other):
-        if not isinstance(other, Pose):
-            return NotImplemented
-        return self._key() == other._key()
-
-    def __hash__(self):
-        return hash(self._key())
-
     def __repr__(self) -> str:
-        def vec(a):
-            return "(" + ", ".join(repr(float(x)) for x in a) + ")"
-
         if self._is_look_at:
-            return f"Pose.look_at(eye={vec(self._eye)}, target={vec(self._target)}, up={vec(self._up_hint)})"
-        return "Pose((" + ", ".join(vec(r) for r in self._matrix) + "))"
+            return (f"Pose.look_at(eye={vector_repr(self._eye)}, target={vector_repr(self._target)}, "
+                    f"up={vector_repr(self._up_hint)})")
+        return "Pose((" + ", ".join(vector_repr(r) for r in self._matrix) + "))"

@@ -23,6 +23,7 @@ import numpy as np
 
 from .._validate import as_array, check_choice, check_positive
 from ._checks import PROJECTION_ZERO_TOL, check_fov, check_int, check_size, optional_positive, scalar
+from ._frozen import Frozen, read_only, vector_repr
 from .kernel import project_xy, ray_xy, unproject_xy
 
 __all__ = ["Projection", "Perspective", "Orthographic", "Intrinsics", "PROJECTION_CONVENTIONS"]
@@ -31,11 +32,7 @@ __all__ = ["Projection", "Perspective", "Orthographic", "Intrinsics", "PROJECTIO
 PROJECTION_CONVENTIONS = ("opengl", "directx")
 
 
-def _vec(a) -> str:
-    return "(" + ", ".join(repr(float(x)) for x in a) + ")"
-
-
-class Projection:
+class Projection(Frozen):
     """A projection of view space onto an image of ``size`` pixels (base of the three kinds).
 
     Attributes
@@ -61,19 +58,11 @@ class Projection:
 
     def _set(self, size, fx, fy, cx, cy, near=None, far=None, **extra):
         """Set every slot (the one place that does)."""
-        set_ = object.__setattr__
-        for name, value in (("_size", size), ("_fx", float(fx)), ("_fy", float(fy)), ("_cx", float(cx)),
-                            ("_cy", float(cy)), ("_near", near), ("_far", far), *extra.items()):
-            set_(self, name, value)
+        self._set_slots(_size=size, _fx=float(fx), _fy=float(fy), _cx=float(cx), _cy=float(cy), _near=near,
+                        _far=far, **extra)
 
     # ------------------------------------------------------------------ attributes
-    size = property(lambda self: self._size, doc="``(width, height)`` in pixels.")
-    fx = property(lambda self: self._fx, doc="Focal length along x in pixels (orthographic: pixels per unit).")
-    fy = property(lambda self: self._fy, doc="Focal length along y in pixels (orthographic: pixels per unit).")
-    cx = property(lambda self: self._cx, doc="Principal point's x in pixels from the image's left edge.")
-    cy = property(lambda self: self._cy, doc="Principal point's y in pixels from the image's top edge (y down).")
-    near = property(lambda self: self._near, doc="Near clipping distance, or None.")
-    far = property(lambda self: self._far, doc="Far clipping distance (may be +inf), or None.")
+    size, fx, fy, cx, cy, near, far = read_only("size", "fx", "fy", "cx", "cy", "near", "far")
     fov_y = property(lambda self: None, doc="Vertical field of view in degrees (:class:`Perspective` only).")
     ortho_height = property(lambda self: None, doc="World-space view height (:class:`Orthographic` only).")
 
@@ -206,7 +195,7 @@ class Projection:
         Parameters
         ----------
         depth : (...) float
-            View-space z.
+            As in :meth:`pixels_per_unit`.
 
         Returns
         -------
@@ -248,19 +237,9 @@ class Projection:
     def _params(self) -> tuple:
         raise NotImplementedError
 
-    def __setattr__(self, name, value):
-        raise AttributeError(f"{type(self).__name__} is immutable; cannot set {name!r}")
-
-    def __delattr__(self, name):
-        raise AttributeError(f"{type(self).__name__} is immutable; cannot delete {name!r}")
-
-    def __eq__(self, other):
-        if not isinstance(other, Projection):
-            return NotImplemented
-        return type(self) is type(other) and self._params() == other._params()
-
-    def __hash__(self):
-        return hash((type(self).__name__, self._params()))
+    def _key(self) -> tuple:
+        # equal projections are of one kind with equal parameters
+        return (type(self), self._params())
 
     def __reduce__(self):
         return (_rebuild, (type(self).__name__, self._params()))
@@ -331,8 +310,8 @@ class _LookAtRecord:
 
     def camera_repr(self, pose) -> str:
         lens = f"fov_y={self.fov_y!r}" if self.fov_y is not None else f"ortho_height={self.ortho_height!r}"
-        return (f"Camera.look_at(eye={_vec(pose.eye)}, target={_vec(pose.target)}, "
-                f"up={_vec(pose.up_hint)}, size={self._size!r}, {lens})")
+        return (f"Camera.look_at(eye={vector_repr(pose.eye)}, target={vector_repr(pose.target)}, "
+                f"up={vector_repr(pose.up_hint)}, size={self._size!r}, {lens})")
 
 
 class Perspective(_LookAtRecord, _Pinhole):
@@ -361,7 +340,7 @@ class Perspective(_LookAtRecord, _Pinhole):
         focal = (H / 2.0) / math.tan(math.radians(fov_y) / 2.0)
         self._set(size, focal, focal, W / 2.0, H / 2.0, _fov_y=float(fov_y))
 
-    fov_y = property(lambda self: self._fov_y, doc="Vertical field of view in degrees.")
+    (fov_y,) = read_only("fov_y")
 
     def _params(self):
         return (self._fov_y, self._size)
@@ -398,7 +377,7 @@ class Orthographic(_LookAtRecord, Projection):
         scale = H / ortho_height
         self._set(size, scale, scale, W / 2.0, H / 2.0, _ortho_height=float(ortho_height))
 
-    ortho_height = property(lambda self: self._ortho_height, doc="World-space height of the view.")
+    (ortho_height,) = read_only("ortho_height")
 
     def _params(self):
         return (self._ortho_height, self._size)
@@ -499,7 +478,7 @@ class Intrinsics(_Pinhole):
                 "pose": None if pose is None else pose.to_dict()["pose"], "projection": "perspective"}
 
     def camera_repr(self, pose) -> str:
-        matrix = None if pose is None else "(" + ", ".join(_vec(r) for r in pose.matrix) + ")"
+        matrix = None if pose is None else "(" + ", ".join(vector_repr(r) for r in pose.matrix) + ")"
         far = "float('inf')" if self._far == math.inf else repr(self._far)
         return (f"Camera.from_intrinsics({self._fx!r}, {self._fy!r}, {self._cx!r}, {self._cy!r}, "
                 f"{self._size!r}, pose={matrix}, near={self._near!r}, far={far})")
