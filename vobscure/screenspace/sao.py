@@ -320,7 +320,10 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     Raises
     ------
     ValueError
-        If an argument is invalid (the message names it).
+        If ``gbuffer`` is not a GBuffer, ``radius``, ``k`` or ``epsilon`` is not a positive
+        finite number, ``sigma`` or ``beta`` is negative or not finite, ``samples`` or
+        ``turns`` is not an integer >= 1, ``seed`` or ``noise_size`` is invalid, or
+        ``offscreen`` is not one of its values; the message names the argument.
 
     Notes
     -----
