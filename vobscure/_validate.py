@@ -13,6 +13,7 @@ import numpy as np
 
 __all__ = [
     "as_array",
+    "as_numeric",
     "as_points",
     "as_unit_vectors",
     "as_rng",
@@ -40,6 +41,21 @@ def as_array(value, name: str, *, shape=None, dtype=np.float64, finite: bool = T
             f"{name} must be finite; it holds {bad} NaN or inf value(s). "
             f"Remove or mask those entries before the call."
         )
+    return arr
+
+
+def as_numeric(value, name: str, *, kinds: str = "fiu", expected: str = "a numeric array") -> np.ndarray:
+    """``np.asarray(value)``, its dtype kept, if the dtype's kind is one of ``kinds``.
+
+    Anything else (strings, objects, ragged sequences) raises a ValueError naming ``name``:
+    "{name} must be {expected}, got {type}: {reason}".
+    """
+    try:
+        arr = np.asarray(value)
+        if arr.dtype.kind not in kinds:
+            raise TypeError(f"dtype {arr.dtype}")
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be {expected}, got {type(value).__name__}: {exc}") from None
     return arr
 
 

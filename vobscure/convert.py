@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from ._validate import check_choice, check_positive
+from ._validate import as_numeric, check_choice, check_positive
 
 __all__ = ["convert_buffers", "normals_from_depth", "NormalsRenormalizedWarning", "NormalsRepairedWarning",
            "DEPTH_KINDS", "NORMAL_SPACES", "NORMAL_ENCODINGS", "CONVENTIONS", "NORMAL_LENGTH_TOL",
@@ -100,12 +100,7 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
     normal_tol = check_positive(normal_tol, "normal_tol")
 
     # -- shapes and dtypes
-    try:
-        given = np.asarray(depth)
-        if given.dtype.kind not in "fiu":
-            raise TypeError(f"dtype {given.dtype}")
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"depth must be a numeric (H, W) array, got {type(depth).__name__}: {exc}") from None
+    given = as_numeric(depth, "depth", expected="a numeric (H, W) array")
     nrm = None if normal is None else np.asarray(normal)
     nshape = None if nrm is None else nrm.shape
     if given.shape != camera.shape:

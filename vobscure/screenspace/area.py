@@ -319,11 +319,8 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     Parameters
     ----------
     gbuffer : GBuffer
-        The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
-        normals (H, W, 3) (facing the camera, n_z < 0), from
-        :func:`vobscure.render_gbuffer`; perspective (any pinhole: principal point
-        anywhere, fx != fy allowed) or orthographic camera. The normals
-        are read only with ``normal_clamp``.
+        The view's depth and view-space normals, as for :func:`vobscure.vo_point` (any
+        pinhole or orthographic camera); the normals are read only with ``normal_clamp``.
     radius : float
         Radius R of the ball around each pixel's point, in world units (> 0).
     samples : int or SamplePattern, optional
@@ -365,36 +362,31 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         tent (the paper's rule). Planes stay exact whatever the value; elsewhere the best
         value depends on the scene (``docs/screenspace.md``, "Level of detail").
     randomize : bool, optional
-        Reflect the pattern per pixel about a random 2-D direction (Sec. 4.5), read from a
-        tiled ``noise_size`` x ``noise_size`` texture of unit vectors. Default True; False
-        uses the pattern as given at every pixel (``seed`` is then unused).
+        Reflect the pattern per pixel about a random 2-D direction (Sec. 4.5), as
+        :func:`vobscure.vo_line` does. Default True.
     seed : int, numpy.random.Generator or None, optional
-        Seed of the random texture (default 0), converted once: an int >= 0 or None
-        (fresh OS entropy) goes through ``numpy.random.default_rng``, a Generator is used
-        as is. The same int gives the same image.
+        Seed of the random texture (default 0), as for :func:`vobscure.vo_point`.
     offscreen : {"clamp", "open"}, optional
         Footprints off the image read the border texels (``"clamp"``, default: the mip
         levels are padded by edge replication) or empty space (``"open"``).
     noise_size : int, optional
-        Edge of the tiled random texture in pixels (>= 1, default
-        ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
-        (i mod noise_size, j mod noise_size). Unused without ``randomize``.
+        Edge of the tiled random texture in pixels, as for :func:`vobscure.vo_point`
+        (default 4). Unused without ``randomize``.
     reconstruction : {"bspline", "trilinear"}, optional
         Deprecated name of ``fetch`` (a DeprecationWarning); given, it replaces ``fetch``.
 
     Returns
     -------
     (H, W) ndarray
-        Visibility in [0, 1] (1 = open), NaN on background; float32 for a float32
-        G-buffer, float64 otherwise (accumulated in float64).
+        Visibility in [0, 1], as for :func:`vobscure.vo_point` (1 = open, NaN on
+        background, float32 for a float32 G-buffer). Depth-buffer reads: see Notes.
 
     Raises
     ------
     ValueError
-        If ``gbuffer`` is not a GBuffer, ``radius`` or ``thickness`` is not a positive
-        finite number, ``samples`` is neither a count >= 1 nor a disk pattern, ``lod_bias``
-        is not a finite scalar, ``seed`` or ``noise_size`` is invalid, or a choice argument
-        is not one of its values; the message names the argument.
+        For the arguments :func:`vobscure.vo_line` rejects, a ``lod_bias`` that is not a
+        finite scalar, or a ``model`` or ``fetch`` that is not one of its values; the
+        message names the argument.
 
     Notes
     -----

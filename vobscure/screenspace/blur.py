@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_choice, check_int, check_positive
+from .._validate import as_numeric, check_choice, check_int, check_positive
 from ..gbuffer import GBuffer
 
 __all__ = ["bilateral_blur", "combine_radii", "BLUR_PASSES", "COMBINE_MODES"]
@@ -177,13 +177,7 @@ def bilateral_blur(visibility, gbuffer, *, radius_px=4, sigma_spatial=None, sigm
 
 def _as_visibility(visibility, shape) -> tuple[np.ndarray, np.dtype]:
     """(H, W) float64 copy of ``visibility`` and the dtype to return."""
-    try:
-        arr = np.asarray(visibility)
-        if arr.dtype.kind not in "biuf":
-            raise TypeError(f"dtype {arr.dtype}")
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"visibility must be a real numeric array, "
-                         f"got {type(visibility).__name__}: {exc}") from None
+    arr = as_numeric(visibility, "visibility", kinds="biuf", expected="a real numeric array")
     if arr.shape != tuple(shape):
         raise ValueError(f"visibility must have the G-buffer's shape {tuple(shape)} (gbuffer.depth.shape), "
                          f"got {arr.shape}")
@@ -274,16 +268,8 @@ def combine_radii(a, b, *, mode="product") -> np.ndarray:
     [[0.6, 0.5], [0.5, nan]]
     """
     check_choice(mode, "mode", COMBINE_MODES)
-    arrays = []
-    for name, value in (("a", a), ("b", b)):
-        try:
-            arr = np.asarray(value)
-            if arr.dtype.kind not in "biuf":
-                raise TypeError(f"dtype {arr.dtype}")
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"{name} must be a real numeric array, got {type(value).__name__}: {exc}") from None
-        arrays.append(arr)
-    a_arr, b_arr = arrays
+    a_arr, b_arr = (as_numeric(value, name, kinds="biuf", expected="a real numeric array")
+                    for name, value in (("a", a), ("b", b)))
     if a_arr.shape != b_arr.shape:
         raise ValueError(f"a and b must have the same shape, got a {a_arr.shape} and b {b_arr.shape}")
     dtype = np.float32 if a_arr.dtype == np.float32 and b_arr.dtype == np.float32 else np.float64

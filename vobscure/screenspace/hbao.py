@@ -78,7 +78,10 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
     Raises
     ------
     ValueError
-        If an argument is invalid (the message names it).
+        If ``gbuffer`` is not a GBuffer, ``radius`` is not a positive finite number,
+        ``directions`` or ``steps`` is not an integer >= 1, ``angle_bias`` is not in
+        [0, pi/2), ``seed`` or ``noise_size`` is invalid, or ``offscreen`` is not one of its
+        values; the message names the argument.
 
     Notes
     -----

@@ -140,11 +140,8 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     Parameters
     ----------
     gbuffer : GBuffer
-        The view's depth (H, W) (view-space z > 0, +inf on background) and view-space
-        normals (H, W, 3) (facing the camera, n_z < 0), from
-        :func:`vobscure.render_gbuffer`; perspective (any pinhole: principal point
-        anywhere, fx != fy allowed) or orthographic camera. The normals
-        are read only with ``normal_clamp``.
+        The view's depth and view-space normals, as for :func:`vobscure.vo_point` (any
+        pinhole or orthographic camera); the normals are read only with ``normal_clamp``.
     radius : float
         Radius R of the ball around each pixel's point, in world units (> 0).
     samples : int or SamplePattern, optional
@@ -152,7 +149,7 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         ``vobscure.patterns.disk(n)`` (default 9: the larger line configuration of Loos &
         Sloan 2010, Table 1), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 2) ``points`` in the unit disk and
-        (n,) footnote-5 ``weights``. Depth-buffer taps per pixel: n.
+        (n,) footnote-5 ``weights``.
     normal_clamp : bool, optional
         Restrict the ball to the half-ball on the normal's side (Sec. 4.4): every chord is
         clipped at the tangent plane. A flat open surface then reads 1.0 instead of 0.5.
@@ -170,9 +167,7 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         tiled ``noise_size`` x ``noise_size`` texture of unit vectors. Default True; False
         uses the pattern as given at every pixel (``seed`` is then unused).
     seed : int, numpy.random.Generator or None, optional
-        Seed of the random texture (default 0), converted once: an int >= 0 or None
-        (fresh OS entropy) goes through ``numpy.random.default_rng``, a Generator is used
-        as is. The same int gives the same image.
+        Seed of the random texture (default 0), as for :func:`vobscure.vo_point`.
     fetch : {"nearest", "bilinear"}, optional
         How the depth for a disk point is read. ``"nearest"`` (default): the depth of the
         pixel the point falls in, the line keeping its exact offset (x, y); the tap offset
@@ -185,23 +180,21 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         Disk points that project off the image read the nearest border pixel
         (``"clamp"``, default) or empty space (``"open"``).
     noise_size : int, optional
-        Edge of the tiled random texture in pixels (>= 1, default
-        ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
-        (i mod noise_size, j mod noise_size). Unused without ``randomize``.
+        Edge of the tiled random texture in pixels, as for :func:`vobscure.vo_point`
+        (default 4). Unused without ``randomize``.
 
     Returns
     -------
     (H, W) ndarray
-        Visibility in [0, 1] (1 = open), NaN on background; float32 for a float32
-        G-buffer, float64 otherwise (accumulated in float64).
+        Visibility in [0, 1], as for :func:`vobscure.vo_point` (1 = open, NaN on
+        background, float32 for a float32 G-buffer). Depth-buffer taps per pixel: n, one
+        per sample.
 
     Raises
     ------
     ValueError
-        If ``gbuffer`` is not a GBuffer, ``radius`` or ``thickness`` is not a positive
-        finite number, ``samples`` is neither a count >= 1 nor a disk pattern, ``seed`` or
-        ``noise_size`` is invalid, or a choice argument is not one of its values; the
-        message names the argument.
+        For the arguments :func:`vobscure.vo_point` rejects, ``samples`` being a disk
+        pattern here; the message names the argument.
 
     Notes
     -----

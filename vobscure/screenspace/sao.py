@@ -34,7 +34,9 @@ def sao_taps(samples: int) -> int:
     return check_int(samples, "samples")
 
 
-def _check(gbuffer, radius, samples, sigma, k, epsilon, offscreen, noise_size):
+def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_size, seed, randomize):
+    """The arguments :func:`alchemy` and :func:`sao` share, validated, and the rotation texture:
+    ``(gb, radius, samples, sigma, k, epsilon, beta, texture)``."""
     gb = C.as_gbuffer(gbuffer)
     radius = check_positive(radius, "radius")
     samples = check_int(samples, "samples")
@@ -43,7 +45,9 @@ def _check(gbuffer, radius, samples, sigma, k, epsilon, offscreen, noise_size):
     epsilon = check_positive(epsilon, "epsilon")
     check_choice(offscreen, "offscreen", C.OFFSCREEN)
     check_int(noise_size, "noise_size")
-    return gb, radius, samples, sigma, k, epsilon
+    beta = check_positive(beta, "beta", allow_zero=True)
+    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    return gb, radius, samples, sigma, k, epsilon, beta, texture
 
 
 def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offscreen: str, summand,
@@ -236,10 +240,8 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     >>> float(alchemy(gb, radius=0.3)[4, 4])
     1.0
     """
-    gb, radius, s, sigma, k, epsilon = _check(gbuffer, radius, samples, sigma, k, epsilon, offscreen,
-                                              noise_size)
-    beta = check_positive(beta, "beta", allow_zero=True)
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    gb, radius, s, sigma, k, epsilon, beta, texture = _check(gbuffer, radius, samples, sigma, k, epsilon, beta,
+                                                             offscreen, noise_size, seed, randomize)
     i = np.arange(s)
     rho = np.sqrt((i + 0.5) / s)
     theta = i * GOLDEN_ANGLE
@@ -318,7 +320,10 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     Raises
     ------
     ValueError
-        If an argument is invalid (the message names it).
+        If ``gbuffer`` is not a GBuffer, ``radius``, ``k`` or ``epsilon`` is not a positive
+        finite number, ``sigma`` or ``beta`` is negative or not finite, ``samples`` or
+        ``turns`` is not an integer >= 1, ``seed`` or ``noise_size`` is invalid, or
+        ``offscreen`` is not one of its values; the message names the argument.
 
     Notes
     -----
@@ -354,11 +359,9 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     >>> float(sao(gb, radius=0.3)[4, 4])
     1.0
     """
-    gb, radius, s, sigma, k, epsilon = _check(gbuffer, radius, samples, sigma, k, epsilon, offscreen,
-                                              noise_size)
+    gb, radius, s, sigma, k, epsilon, beta, texture = _check(gbuffer, radius, samples, sigma, k, epsilon, beta,
+                                                             offscreen, noise_size, seed, randomize)
     tau = check_int(turns, "turns")
-    beta = check_positive(beta, "beta", allow_zero=True)
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
     # SAO's spiral (reference shader, tapLocation): alpha_i = (i + 0.5) / s, h_i = r' alpha_i,
     # theta_i = 2 pi alpha_i tau + phi
     alpha = (np.arange(s) + 0.5) / s
