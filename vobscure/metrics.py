@@ -36,12 +36,12 @@ FLATTEST_SLOPE = -1e-3
 
 
 class _FlatRecord:
-    """A record of scalars whose :meth:`as_dict` is its fields by name, in order (a row of a
-    table or CSV file)."""
+    """A dataclass record of scalars, one row of a table."""
 
     __slots__ = ()
 
     def as_dict(self) -> dict:
+        """The fields by name, in order (a row of a table or CSV file)."""
         return asdict(self)
 
 
