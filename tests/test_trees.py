@@ -432,6 +432,25 @@ def test_canopy_rejects_a_non_shell():
         canopy_visibility([[0, 0, 0]], [[0, 1, 0]], (0, 0, 0, 1), density=1.0)
 
 
+@pytest.mark.parametrize("model", ["canopy", "poisson"])
+def test_leaf_models_count_the_bad_normals(model):
+    """Both leaf models reject zero-length and non-finite normals, counting them: per row
+    for the canopy model, per value for the Poisson cloud."""
+    from vobscure.trees import poisson_visibility
+
+    def run(normals):
+        x, s = np.zeros((3, 3)), Sphere((0, 0, 0), 1.0)
+        if model == "canopy":
+            return canopy_visibility(x, normals, s, density=1.0)
+        return poisson_visibility(x, normals, s, extinction=1.0)
+
+    with pytest.raises(ValueError, match=r"normals hold 2 zero-length vector\(s\)"):
+        run([[0, 0, 0], [0, 1, 0], [0, 0, 0]])
+    counted = "1 NaN or inf row" if model == "canopy" else "2 NaN or inf value"
+    with pytest.raises(ValueError, match=f"normals must be finite; they hold {counted}"):
+        run([[np.nan, np.inf, 0], [0, 1, 0], [0, 1, 0]])
+
+
 # ----------------------------------------------------------------------------- Reeves-Blau
 def test_reeves_blau_closed_forms():
     s = Sphere((1, 0, 0), 2.0)

@@ -408,7 +408,7 @@ def obscurance(scene, points, normals, *, radius: float, falloff="linear", rays:
     Returns
     -------
     Estimate
-        (n,) value and stderr.
+        W per point: (n,) ``value`` in [0, 1] and its ``stderr``.
 
     References
     ----------
@@ -540,7 +540,8 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
     Returns
     -------
     Estimate
-        (n,) value and stderr.
+        V per point, the unoccupied fraction of its ball (or half-ball): (n,) ``value`` in
+        [0, 1] and its ``stderr``.
 
     References
     ----------

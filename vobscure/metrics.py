@@ -35,8 +35,18 @@ CALIBRATION_BINS = 10
 FLATTEST_SLOPE = -1e-3
 
 
+class _FlatRecord:
+    """A dataclass record of scalars, one row of a table."""
+
+    __slots__ = ()
+
+    def as_dict(self) -> dict:
+        """The fields by name, in order (a row of a table or CSV file)."""
+        return asdict(self)
+
+
 @dataclass(frozen=True)
-class ErrorReport:
+class ErrorReport(_FlatRecord):
     """Error of an estimate against a reference over the pixels both define.
 
     Attributes
@@ -63,9 +73,6 @@ class ErrorReport:
     ssim: float
     pixels: int
     ignored: int
-
-    def as_dict(self) -> dict:
-        return asdict(self)
 
 
 def error(estimate, reference, *, mask=None) -> ErrorReport:
@@ -345,7 +352,7 @@ def decompose(estimate, screen_reference, world_vo, *, ao=None, obscurance=None,
 
 # ----------------------------------------------------------------------------- flicker
 @dataclass(frozen=True)
-class Flicker:
+class Flicker(_FlatRecord):
     """Temporal instability of an animated estimate (see :func:`flicker`).
 
     Attributes
@@ -369,9 +376,6 @@ class Flicker:
     reference_change: float
     pairs: int
     ignored: int
-
-    def as_dict(self) -> dict:
-        return asdict(self)
 
 
 def flicker(frames, reference_frames=None, *, mask=None) -> Flicker:

@@ -27,6 +27,11 @@ __all__ = [
 ]
 
 
+def _polar(r: np.ndarray, phi: np.ndarray, *z: np.ndarray) -> np.ndarray:
+    """(..., 2) points ``r (cos phi, sin phi)``, or (..., 3) with ``z`` as third coordinate."""
+    return np.stack([r * np.cos(phi), r * np.sin(phi), *z], axis=-1)
+
+
 def square_to_cosine_hemisphere(u: np.ndarray) -> np.ndarray:
     """(..., 2) uniform in [0, 1)^2 -> (..., 3) unit vectors on the z >= 0 hemisphere, pdf cos(theta)/pi.
 
@@ -35,7 +40,7 @@ def square_to_cosine_hemisphere(u: np.ndarray) -> np.ndarray:
     r = np.sqrt(u[..., 0])
     phi = 2.0 * np.pi * u[..., 1]
     z = np.sqrt(np.maximum(0.0, 1.0 - u[..., 0]))
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+    return _polar(r, phi, z)
 
 
 def square_to_uniform_hemisphere(u: np.ndarray) -> np.ndarray:
@@ -43,7 +48,7 @@ def square_to_uniform_hemisphere(u: np.ndarray) -> np.ndarray:
     z = u[..., 0]
     r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
     phi = 2.0 * np.pi * u[..., 1]
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+    return _polar(r, phi, z)
 
 
 def cube_to_uniform_ball(u: np.ndarray) -> np.ndarray:
@@ -52,7 +57,7 @@ def cube_to_uniform_ball(u: np.ndarray) -> np.ndarray:
     z = 1.0 - 2.0 * u[..., 1]
     s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
     phi = 2.0 * np.pi * u[..., 2]
-    return r[..., None] * np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+    return r[..., None] * _polar(s, phi, z)
 
 
 def cube_to_uniform_half_ball(u: np.ndarray) -> np.ndarray:
@@ -102,7 +107,7 @@ def square_to_uniform_disk(u: np.ndarray) -> np.ndarray:
     """
     r = np.sqrt(u[..., 0])
     phi = 2.0 * np.pi * u[..., 1]
-    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+    return _polar(r, phi)
 
 
 def square_to_uniform_half_disk(u: np.ndarray) -> np.ndarray:
@@ -127,7 +132,7 @@ def square_to_uniform_half_disk(u: np.ndarray) -> np.ndarray:
     """
     r = np.sqrt(u[..., 0])
     phi = np.pi * u[..., 1] - 0.5 * np.pi
-    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+    return _polar(r, phi)
 
 
 def square_to_uniform_disk_concentric(u: np.ndarray) -> np.ndarray:
@@ -163,7 +168,7 @@ def square_to_uniform_disk_concentric(u: np.ndarray) -> np.ndarray:
         phi = np.where(big_a, 0.25 * np.pi * b / np.where(a == 0, 1.0, a),
                        0.5 * np.pi - 0.25 * np.pi * a / np.where(b == 0, 1.0, b))
     phi = np.where(r == 0, 0.0, phi)
-    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+    return _polar(r, phi)
 
 
 def tangent_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

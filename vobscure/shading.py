@@ -113,6 +113,20 @@ def _broadcast(*named):
                          f"point and RGB colours, pass k_A[..., None].") from None
 
 
+def _arguments(*named) -> tuple:
+    """The arguments of a shading term, each ``(name, value, hi)`` checked in turn as a finite
+    float array in [0, hi] (hi None: >= 0), then checked to broadcast together. Returns the
+    float64 arrays in order and, last, the output dtype (see :func:`_out_dtype`)."""
+    arrays, owns = [], []
+    for name, value, hi in named:
+        arr, own = _float(value, name)
+        _in_range(arr, name, 0.0, hi)
+        arrays.append(arr)
+        owns.append(own)
+    _broadcast(*((name, arr) for (name, _, _), arr in zip(named, arrays)))
+    return (*arrays, _out_dtype(*owns))
+
+
 def _out(value: np.ndarray, dtype: np.dtype) -> np.ndarray:
     return np.asarray(value).astype(dtype, copy=False)
 
@@ -160,12 +174,9 @@ def ambient(k_A, c_amb, *, L_A=1.0) -> np.ndarray:
     array([[0.8, 0.6, 0.4],
            [0.4, 0.3, 0.2]])
     """
-    k_A, d1 = _visibility(k_A)
-    c_amb, d2 = _colour(c_amb, "c_amb")
-    L_A, d3 = _colour(L_A, "L_A")
-    _broadcast(("k_A", k_A), ("c_amb", c_amb), ("L_A", L_A))
+    k_A, c_amb, L_A, dtype = _arguments(("k_A", k_A, 1.0), ("c_amb", c_amb, None), ("L_A", L_A, None))
     L_o = k_A * c_amb * L_A                                    # RTR Eq. 9.17 (E_ind = pi L_A)
-    return _out(L_o, _out_dtype(d1, d2, d3))
+    return _out(L_o, dtype)
 
 
 def stewart_langer(k_A, c_amb) -> np.ndarray:
@@ -210,14 +221,12 @@ def stewart_langer(k_A, c_amb) -> np.ndarray:
     >>> float(stewart_langer(0.5, 0.5))
     0.6666666666666666
     """
-    k_A, d1 = _visibility(k_A)
-    c_amb, d2 = _colour(c_amb, "c_amb", at_most_one=True)
-    _broadcast(("k_A", k_A), ("c_amb", c_amb))
+    k_A, c_amb, dtype = _arguments(("k_A", k_A, 1.0), ("c_amb", c_amb, 1.0))
     denominator = 1.0 - c_amb * (1.0 - k_A)                    # > 0 unless k_A = 0 and c_amb = 1
     with np.errstate(invalid="ignore", divide="ignore"):
         k_A_prime = k_A / denominator                          # RTR Eq. 9.23
     k_A_prime = np.where(k_A == 0.0, 0.0, k_A_prime)
-    return _out(k_A_prime, _out_dtype(d1, d2))
+    return _out(k_A_prime, dtype)
 
 
 def multibounce_jimenez(k_A, albedo) -> np.ndarray:
@@ -262,14 +271,12 @@ def multibounce_jimenez(k_A, albedo) -> np.ndarray:
     >>> round(float(multibounce_jimenez(0.5, 0.8)), 4)
     0.8111
     """
-    x, d1 = _visibility(k_A)
-    rho, d2 = _colour(albedo, "albedo", at_most_one=True)
-    _broadcast(("k_A", x), ("albedo", rho))
+    x, rho, dtype = _arguments(("k_A", k_A, 1.0), ("albedo", albedo, 1.0))
     a = JIMENEZ_2016["a"][0] * rho + JIMENEZ_2016["a"][1]     # Jimenez et al. 2016, the fit
     b = JIMENEZ_2016["b"][0] * rho + JIMENEZ_2016["b"][1]
     c = JIMENEZ_2016["c"][0] * rho + JIMENEZ_2016["c"][1]
     G = np.maximum(x, ((a * x + b) * x + c) * x)               # Jimenez et al. 2016, max(x, cubic)
-    return _out(G, _out_dtype(d1, d2))
+    return _out(G, dtype)
 
 
 def bent_cosine(l, n_bent) -> np.ndarray:

@@ -2,32 +2,19 @@
 (:func:`as_scene`, :func:`resolve`) of a scene argument; vegetation scenes (leaf clouds, trees,
 grass) with open, two-sided foliage in :mod:`vobscure.scenes.vegetation`."""
 
+from . import _resolve, _scene, procedural, vegetation
 from ._resolve import as_scene, check_spec, resolve
 from ._scene import Scene
 from .io import DegenerateFacesWarning, load
 from .procedural import blob, cornell_box, crease, get, groove, names, slab, sphere_on_plane, steps
 from .vegetation import grass, leaf_cloud, leaf_cloud_dense, leaf_points, tree, tree_poplar
 
+# every public name of the submodules, but of io only the loader and its warning
 __all__ = [
-    "Scene",
-    "as_scene",
-    "check_spec",
-    "resolve",
+    *_scene.__all__,
+    *_resolve.__all__,
     "load",
     "DegenerateFacesWarning",
-    "names",
-    "get",
-    "slab",
-    "crease",
-    "groove",
-    "sphere_on_plane",
-    "steps",
-    "cornell_box",
-    "blob",
-    "leaf_cloud",
-    "leaf_cloud_dense",
-    "tree",
-    "tree_poplar",
-    "grass",
-    "leaf_points",
+    *procedural.__all__,
+    *vegetation.__all__,
 ]

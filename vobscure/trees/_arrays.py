@@ -1,11 +1,14 @@
-"""Array helpers shared by the tree models: raw (n, 3) inputs checked per chunk, and the
-output dtype rule (float32 in, float32 out)."""
+"""Array helpers shared by the tree models: raw (n, 3) inputs checked per chunk, the check of
+the normals' lengths, and the output dtype rule (float32 in, float32 out)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["as_raw_points", "out_dtype"]
+__all__ = ["as_raw_points", "check_normal_lengths", "out_dtype", "ZERO_NORMAL"]
+
+#: Normals shorter than this are rejected (they have no direction).
+ZERO_NORMAL = 1e-12
 
 
 def as_raw_points(value, name: str) -> np.ndarray:
@@ -22,6 +25,21 @@ def as_raw_points(value, name: str) -> np.ndarray:
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
     return arr
+
+
+def check_normal_lengths(mm: np.ndarray, normals: np.ndarray | None = None) -> None:
+    """Reject normals from their (k,) squared lengths ``mm``: a non-finite one (a NaN or inf
+    coordinate makes it non-finite) or one shorter than :data:`ZERO_NORMAL`. The message
+    counts the NaN or inf values of ``normals`` when they are given, else the rows."""
+    if not np.all(np.isfinite(mm)):
+        if normals is None:
+            raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(mm)))} "
+                             f"NaN or inf row(s)")
+        raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(normals)))} "
+                         f"NaN or inf value(s)")
+    if np.any(mm < ZERO_NORMAL ** 2):
+        raise ValueError(f"normals hold {int(np.count_nonzero(mm < ZERO_NORMAL ** 2))} zero-length vector(s); "
+                         f"every normal needs a length")
 
 
 def out_dtype(*arrays) -> type:

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .._validate import as_array, check_int, check_positive
-from ._arrays import as_raw_points, out_dtype
+from ._arrays import ZERO_NORMAL, as_raw_points, check_normal_lengths, out_dtype
 from .poisson import extinction
 from .shells import Ellipsoid, MultiShell, Sphere
 
@@ -57,8 +57,6 @@ FIT_GRID_STEP = 0.25
 LOG_K_BOUNDS = (math.log(1e-4), math.log(1e4))
 K_GRID = 33
 K_XATOL = 1e-6
-#: Normals shorter than this are rejected (they have no direction).
-ZERO_NORMAL = 1e-12
 
 
 # ----------------------------------------------------------------------------- validation
@@ -78,12 +76,7 @@ def _cap_optical_depth(x: np.ndarray, m: np.ndarray) -> np.ndarray:
     n.x = (m.x) / |m| and the in-plane distance d^2 = |x|^2 - (n.x)^2, so no unit normals
     are formed (one pass fewer over three components)."""
     mm = np.einsum("ij,ij->i", m, m)
-    if not np.all(np.isfinite(mm)):
-        raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(mm)))} "
-                         f"NaN or inf row(s)")
-    if np.any(mm < ZERO_NORMAL ** 2):
-        raise ValueError(f"normals hold {int(np.count_nonzero(mm < ZERO_NORMAL ** 2))} zero-length vector(s); "
-                         f"every normal needs a length")
+    check_normal_lengths(mm)
     n_dot_x = np.einsum("ij,ij->i", m, x)
     n_dot_x /= np.sqrt(mm)                                        # n.(x - c), R = 1
     d2 = np.einsum("ij,ij->i", x, x)
@@ -321,6 +314,17 @@ def _grid_then_brent(loss, grid: np.ndarray, *, xatol: float) -> tuple[float, fl
     return float(grid[best]), float(losses[best])
 
 
+def _fit_weights(weights, like: np.ndarray) -> np.ndarray:
+    """The weights of a least-squares fit: ``weights`` checked non-negative with the shape of
+    ``like``, or ones like ``like`` (its dtype too) for None."""
+    if weights is None:
+        return np.ones_like(like)
+    w = as_array(weights, "weights", shape=(like.shape[0],))
+    if np.any(w < 0):
+        raise ValueError("weights must be non-negative")
+    return w
+
+
 def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     r"""The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
 
@@ -377,12 +381,7 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     v = as_array(reference, "reference", shape=(tau.shape[0],), finite=False)
     if np.any(np.isinf(v)):
         raise ValueError("reference must not hold inf (NaN entries are ignored)")
-    if weights is None:
-        w = np.ones_like(tau)
-    else:
-        w = as_array(weights, "weights", shape=(tau.shape[0],))
-        if np.any(w < 0):
-            raise ValueError("weights must be non-negative")
+    w = _fit_weights(weights, tau)
     use = np.isfinite(v) & (w > 0) & (tau > 0)
     if not np.any(use):
         raise ValueError("nothing to fit: no point has a finite reference, a positive weight and a "
@@ -472,12 +471,7 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     _check_shell(shell)
     P = as_array(as_raw_points(points, "points"), "points")
     ref = as_array(reference, "reference", shape=(P.shape[0],))
-    if weights is None:
-        w = np.ones_like(ref)
-    else:
-        w = as_array(weights, "weights", shape=(P.shape[0],))
-        if np.any(w < 0):
-            raise ValueError("weights must be non-negative")
+    w = _fit_weights(weights, ref)
 
     def loss(log_k):
         return float(np.sum(w * (reeves_blau(points, shell, k=math.exp(log_k)) - ref) ** 2))

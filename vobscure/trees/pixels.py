@@ -87,6 +87,13 @@ def _one_shell(scene, shell):
     return bounding_sphere(_canopy_points(scene)) if isinstance(shell, MultiShell) else shell
 
 
+def _from_leaves(model, scene, shell) -> float:
+    """``model(n_leaves, leaf_area, shell)`` with the leaf statistics of ``scene.metadata``
+    (:func:`predict_density` or :func:`extinction`)."""
+    meta = scene.metadata
+    return model(meta["n_leaves"], meta["leaf_area"], shell)
+
+
 def scene_density(scene, shell) -> float:
     """alpha*rho of Eq. 6 predicted from the scene's leaf statistics (``n_leaves``,
     ``leaf_area``) by :func:`predict_density` for ``shell``; for a multishell, the density
@@ -95,13 +102,17 @@ def scene_density(scene, shell) -> float:
 
     Examples
     --------
+    The density whose Eq. 6 matches, at the shell's centre, the transmittance exp(-sigma R)
+    of :func:`scene_extinction`'s sigma:
+
     >>> from vobscure import scenes
     >>> scene = scenes.get("leaf_cloud")
-    >>> scene_density(scene, canopy_shell(scene)) > 0
+    >>> shell = canopy_shell(scene)
+    >>> sigma, R = scene_extinction(scene, shell), shell.radius
+    >>> bool(np.isclose(scene_density(scene, shell), 3.0 * sigma / (2.0 * np.pi * R ** 2)))
     True
     """
-    meta = scene.metadata
-    return predict_density(meta["n_leaves"], meta["leaf_area"], _one_shell(scene, shell))
+    return _from_leaves(predict_density, scene, _one_shell(scene, shell))
 
 
 def hegeman_gbuffer(gbuffer, *, scene, shell: str = "sphere", ground: str = "hegeman", density=None,
@@ -132,7 +143,8 @@ def hegeman_gbuffer(gbuffer, *, scene, shell: str = "sphere", ground: str = "heg
     Returns
     -------
     (H, W) float64
-        Visibility, NaN on background.
+        Sky visibility in [0, 1]: Eq. 6 at the tree's pixels, the occluder model at the
+        ground's; NaN on background.
 
     References
     ----------
@@ -168,11 +180,12 @@ def scene_extinction(scene, shell) -> float:
     --------
     >>> from vobscure import scenes
     >>> scene = scenes.get("leaf_cloud")
-    >>> scene_extinction(scene, canopy_shell(scene)) > 0
+    >>> shell, meta = canopy_shell(scene), scene.metadata
+    >>> n = meta["n_leaves"] / shell.volume
+    >>> bool(np.isclose(scene_extinction(scene, shell), n * meta["leaf_area"] / 2.0))
     True
     """
-    meta = scene.metadata
-    return extinction(meta["n_leaves"], meta["leaf_area"], _one_shell(scene, shell))
+    return _from_leaves(extinction, scene, _one_shell(scene, shell))
 
 
 def poisson_gbuffer(gbuffer, *, scene, shell: str = "sphere", weighting: str = "cosine", k: int = 3,
@@ -201,7 +214,8 @@ def poisson_gbuffer(gbuffer, *, scene, shell: str = "sphere", weighting: str = "
     Returns
     -------
     (H, W) float64
-        Visibility, NaN on background.
+        Expected sky visibility in [0, 1] (the leaf cloud's transmittance, averaged over
+        the hemisphere with ``weighting``), NaN on background.
 
     Notes
     -----
@@ -220,8 +234,7 @@ def poisson_gbuffer(gbuffer, *, scene, shell: str = "sphere", weighting: str = "
 
     def model(x, n):
         canopy = canopy_shell(scene, kind=shell, k=k)
-        meta = scene.metadata
-        sigma = extinction(meta["n_leaves"], meta["leaf_area"], canopy)
+        sigma = _from_leaves(extinction, scene, canopy)
         return poisson_visibility(x, n, canopy, extinction=sigma, weighting=weighting)
 
     return gbuffer.per_pixel(model)
@@ -249,7 +262,7 @@ def reeves_blau_gbuffer(gbuffer, *, scene, k=None, radius=None, normal_clamp: bo
     Returns
     -------
     (H, W) float64
-        Visibility, NaN on background.
+        ``exp(-k depth)`` in [0, 1], NaN on background.
 
     References
     ----------

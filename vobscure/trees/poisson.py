@@ -39,7 +39,7 @@ from functools import lru_cache
 import numpy as np
 
 from .._validate import as_array, as_points, as_unit_vectors, check_choice, check_int, check_positive
-from ._arrays import as_raw_points, out_dtype
+from ._arrays import ZERO_NORMAL, as_raw_points, check_normal_lengths, out_dtype
 from .shells import Ellipsoid, MultiShell, Sphere
 
 __all__ = [
@@ -91,8 +91,6 @@ TABLE_SIGMA_R_MAX = 32.0
 #: per point of a chunk (the affine map, the interpolation's indices and weights), so 16384
 #: points keep them near 3 MB, under 100 bytes per point from 32768 points on.
 DEFAULT_CHUNK = 1 << 14
-#: Normals shorter than this are rejected (they have no direction).
-ZERO_NORMAL = 1e-12
 #: Floor of |m| |x| in the division that gives u (only the centre, where n.x = 0, reaches it).
 _TINY = 1e-300
 
@@ -480,12 +478,7 @@ def _unit_frame(shell, P: np.ndarray, N: np.ndarray):
         raise ValueError("points must be finite and not so far from the shell that their squared distance "
                          "overflows")
     mm = np.einsum("ij,ij->i", m, m)
-    if not np.all(np.isfinite(mm)):
-        raise ValueError(f"normals must be finite; they hold {int(np.count_nonzero(~np.isfinite(N)))} "
-                         f"NaN or inf value(s)")
-    if np.any(mm < ZERO_NORMAL ** 2):
-        raise ValueError(f"normals hold {int(np.count_nonzero(mm < ZERO_NORMAL ** 2))} zero-length vector(s); "
-                         f"every normal needs a length")
+    check_normal_lengths(mm, N)
     return x, m, r2, mm
 
 

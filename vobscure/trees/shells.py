@@ -45,8 +45,29 @@ KHACHIYAN_MAX_ITER = 100_000
 
 
 # ----------------------------------------------------------------------------- shells
+class _UnitBallImage:
+    """The queries every shell answers in its unit frame, where it is the closed unit ball;
+    a subclass supplies the map (``to_unit`` and ``vectors_to_unit``)."""
+
+    __slots__ = ()
+
+    def contains(self, points) -> np.ndarray:
+        """(n,) bool: the point lies in the closed shell."""
+        x = self.to_unit(points)
+        return np.einsum("ij,ij->i", x, x) <= 1.0
+
+    def chord_length(self, origins, directions) -> np.ndarray:
+        r"""(n,) length of the part of the ray :math:`\{o + t d, t \ge 0\}` inside the shell.
+
+        0 for a miss (and for a tangent ray); from the origin to the exit when the origin is
+        inside. ``directions`` need not be unit vectors (they are normalized). See
+        :func:`chord_length`.
+        """
+        return chord_length(self, origins, directions)
+
+
 @dataclass(frozen=True, eq=False)
-class Sphere:
+class Sphere(_UnitBallImage):
     """A sphere of centre ``center`` and radius ``radius`` (Hegeman 2006's "spherical shell").
 
     Parameters
@@ -116,21 +137,9 @@ class Sphere:
         """(n, 3) unit normals in the unit-sphere frame (a uniform scale keeps them)."""
         return as_unit_vectors(normals, "normals")
 
-    def contains(self, points) -> np.ndarray:
-        """(n,) bool: the point lies in the closed ball."""
-        return _contains(self, points)
-
-    def chord_length(self, origins, directions) -> np.ndarray:
-        r"""(n,) length of the part of the ray :math:`\{o + t d, t \ge 0\}` inside the ball.
-
-        0 for a miss (and for a tangent ray); from the origin to the exit when the origin is
-        inside. ``directions`` need not be unit vectors (they are normalized).
-        """
-        return chord_length(self, origins, directions)
-
 
 @dataclass(frozen=True, eq=False)
-class Ellipsoid:
+class Ellipsoid(_UnitBallImage):
     r"""An ellipsoid :math:`\{c + Q \operatorname{diag}(r) \, x' : \lVert x' \rVert \le 1\}`.
 
     Parameters
@@ -223,23 +232,6 @@ class Ellipsoid:
         """
         n = (as_unit_vectors(normals, "normals") @ self.rotation) * self.radii
         return n / np.linalg.norm(n, axis=1, keepdims=True)
-
-    def contains(self, points) -> np.ndarray:
-        """(n,) bool: the point lies in the closed ellipsoid."""
-        return _contains(self, points)
-
-    def chord_length(self, origins, directions) -> np.ndarray:
-        r"""(n,) length of the part of the ray :math:`\{o + t d, t \ge 0\}` inside the ellipsoid.
-
-        0 for a miss (and for a tangent ray); from the origin to the exit when the origin is
-        inside. ``directions`` need not be unit vectors (they are normalized).
-        """
-        return chord_length(self, origins, directions)
-
-
-def _contains(shell, points) -> np.ndarray:
-    x = shell.to_unit(points)
-    return np.einsum("ij,ij->i", x, x) <= 1.0
 
 
 def chord_length(shell, origins, directions) -> np.ndarray:
