@@ -12,8 +12,6 @@ from vobscure import cli
 from vobscure import io as vio
 
 pytest.importorskip("OpenEXR")
-pytestmark = pytest.mark.skipif(not hasattr(vo.GBuffer, "from_arrays"),
-                                reason="GBuffer.from_arrays (issue 12, part 1) has not landed")
 
 SIZE = (24, 16)
 RADIUS = 0.5

@@ -41,9 +41,6 @@ def _png_header(path) -> tuple[int, int]:
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR", f"{path} is not a PNG"
     return data[24], data[25]
 
-needs_from_arrays = pytest.mark.skipif(not hasattr(vo.GBuffer, "from_arrays"),
-                                       reason="GBuffer.from_arrays (issue 12, part 1) has not landed")
-
 
 @pytest.fixture(scope="module")
 def crease():
@@ -86,7 +83,6 @@ def _vo_line(gb, normal_clamp=False):
 
 
 # --------------------------------------------------------------------------- the test of record
-@needs_from_arrays
 def test_blender_exr_round_trip_gives_the_same_estimate(crease, tmp_path):
     path = tmp_path / "frame.exr"
     _blender_exr(path, crease)
@@ -103,7 +99,6 @@ def test_blender_exr_round_trip_gives_the_same_estimate(crease, tmp_path):
         assert np.nanmin(expected) < (0.9 if normal_clamp else 0.45)
 
 
-@needs_from_arrays
 def test_cycles_distance_exr_round_trip(crease, tmp_path):
     path = tmp_path / "frame.exr"
     _blender_exr(path, crease, distance=True)
@@ -186,7 +181,6 @@ def test_exr_gbuffer_round_trip(crease, tmp_path):
     np.testing.assert_array_equal(normal, crease.normal.astype(np.float32))
 
 
-@needs_from_arrays
 def test_npz_round_trip_gives_the_same_estimate(crease, tmp_path):
     vio.write_gbuffer(tmp_path / "f.npz", crease)
     gb = vio.read_gbuffer(tmp_path / "f.npz", camera=crease.camera)
@@ -260,7 +254,6 @@ def test_wrong_shapes_are_refused(tmp_path):
         vio.read_buffers(tmp_path / "h.npz")
 
 
-@needs_from_arrays
 def test_camera_size_must_match(tmp_path):
     np.save(tmp_path / "d.npy", np.ones((2, 3)))
     cam = vo.Camera.look_at((0, 0, 0), (0, 0, 1), size=(2, 3))
@@ -364,7 +357,6 @@ def test_a_failed_write_leaves_the_old_file(tmp_path, monkeypatch, name):
 
 
 # --------------------------------------------------------------------------- the docs
-@needs_from_arrays
 def test_docs_exr_section_runs(tmp_path, monkeypatch):
     """The example of docs/own-buffers.md, "EXR and files", runs as written."""
     text = (DOCS / "own-buffers.md").read_text()

@@ -1,4 +1,4 @@
-"""The Poisson leaf-cloud canopy model (vobscure.trees.poisson, issue 15).
+"""The Poisson leaf-cloud canopy model (vobscure.trees.poisson).
 
 Closed forms (sigma = 0; the centre of a sphere, where every chord is R; the opaque limit,
 against the exact opaque-sphere occlusion of ``sphere_occlusion`` and the fraction of the
