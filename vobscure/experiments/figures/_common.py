@@ -1,6 +1,6 @@
 """What the figure modules share: the :class:`Profile` they are measured at, the
-:class:`Rows` they measure, the files those are written to and read back from, the claims'
-measurement that several figures draw, and the image panels.
+:class:`Rows` they measure, the files those are written to and read back from, the
+measurements that several figures draw (the claims', the trees'), and the image panels.
 
 The writers, the timer, the default radius and the machine record are those of
 :mod:`vobscure.experiments.common` (one copy for every experiment); this module holds what
@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import csv
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,8 +21,9 @@ import numpy as np
 from ..common import write_csv
 
 __all__ = ["BACKGROUND", "FULL_SIZE", "QUICK_SIZE", "CSV_DIGITS", "SCENE_NAMES", "Profile", "Rows",
-           "write_rows", "read_rows", "claims_measurements", "compare_rows", "per_scene", "image_panel",
-           "error_panel", "pixel_rmse", "log_log", "corr", "fmt"]
+           "write_rows", "read_rows", "claims_measurements", "tree_measurements", "compare_rows", "per_scene",
+           "image_panel", "error_panel", "pixel_rmse", "log_log", "corr", "fmt",
+           "deprecated_make"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
@@ -206,6 +208,19 @@ def claims_measurements(profile: Profile) -> dict:
             for scene in claims.SCENES}
 
 
+def tree_measurements(profile: Profile, given=None):
+    """The :class:`vobscure.experiments.trees.Measurements` of ``profile`` (its quick and
+    seed): ``given`` when there is one, else a new one, which measures when first asked.
+
+    Figures that draw the tree measurements take it as the keyword ``trees`` of their
+    ``measure``; the driver (:func:`vobscure.experiments.figures.make`) makes one per run and
+    passes it to each, so that they share the points, ground truths and timings.
+    """
+    from .. import trees
+
+    return trees.Measurements(profile.quick, seed=profile.seed) if given is None else given
+
+
 def compare_rows(scenes, columns, *, extra=None, **options) -> Rows:
     """The rows of :func:`vobscure.experiments.compare.compare` (``options``; no progress, no
     files) for each scene, each row with its ``scene`` and the ``extra`` keys, as :class:`Rows`
@@ -280,3 +295,27 @@ def corr(a, b, mask=None) -> float:
 def fmt(x, digits: int = 3) -> str:
     """A float for a title or table cell: fixed ``digits``, "nan" when not finite."""
     return "nan" if x is None or not np.isfinite(x) else f"{x:.{digits}f}"
+
+
+def deprecated_make(module_name: str):
+    """The deprecated ``make(out_dir, quick=False, *, seed=0)`` of the figure module
+    ``module_name`` (its ``__name__``): a ``DeprecationWarning`` naming ``vobscure figures
+    NAME`` and :func:`vobscure.experiments.figures.make`, then that driver on the one figure at
+    ``Profile(quick=quick, seed=seed)``; returns the files written.
+
+    A figure module keeps its old entry point as the one line ``make = deprecated_make(__name__)``.
+    """
+    name = module_name.rpartition(".")[2]
+
+    def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
+        warnings.warn(f"{module_name}.make(out_dir, quick) is deprecated; use `vobscure figures {name}` or "
+                      f"vobscure.experiments.figures.make({name!r}, out_dir, profile)",
+                      DeprecationWarning, stacklevel=2)
+        from . import make as make_figures
+
+        return make_figures(name, out_dir, Profile(quick=quick, seed=seed))
+
+    make.__module__, make.__doc__ = module_name, (
+        f"Deprecated: ``vobscure figures {name}``, or :func:`vobscure.experiments.figures.make` "
+        f"``({name!r}, out_dir, Profile(quick=quick, seed=seed))``, which this runs after a warning.")
+    return make

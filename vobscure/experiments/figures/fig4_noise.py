@@ -60,7 +60,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._common import Rows
+from ._common import Rows, deprecated_make
 
 __all__ = ["measure", "plot", "goal", "markdown", "METHODS", "VARIANTS", "LINE_COUNTS", "POINT_COUNTS",
            "PAPER_COUNTS", "LIMIT_LINES", "GOAL", "GOAL_Z", "HEADLINE"]
@@ -567,3 +567,6 @@ def markdown(rows, *, command=None, seconds=None) -> str:
                 cells.append(" / ".join(_f(sel[m]["rmse_ref"]) if m in sel else "" for m in METHODS))
             lines.append(f"| {n} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+make = deprecated_make(__name__)

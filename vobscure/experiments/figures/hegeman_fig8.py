@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows
+from ._common import Rows, deprecated_make, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -40,16 +40,25 @@ ORDER = 120
 FIGSIZE = (17.0, 13.0)
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.canopy_rows` with a fitted or predicted
     parameter, and the poplar's per-pixel images of panel (a) (quick: 27 x 48, 32 rays;
-    full: 72 x 128, 256)."""
+    full: 72 x 128, 256).
+
+    Parameters
+    ----------
+    profile : Profile
+        Quick or full, and the seed.
+    trees : vobscure.experiments.trees.Measurements, optional
+        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
+    """
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
-    rows = [r for r in X.canopy_rows(quick, seed=seed) if r["source"] in ("fitted", "predicted")]
+    run = tree_measurements(profile, trees)
+    rows = [r for r in X.canopy_rows(quick, seed=seed, measurements=run) if r["source"] in ("fitted", "predicted")]
     im = X.canopy_images("tree_poplar", size=profile.pick((27, 48), (72, 128)), rays=profile.pick(32, 256),
-                         seed=seed, quick=quick, shells=("sphere", "ellipsoid"))
+                         seed=seed, quick=quick, shells=("sphere", "ellipsoid"), measurements=run)
     arrays = {"truth": im["truth"], **{f"model|{k}": v for k, v in im["models"].items()}}
     meta = {"seed": seed, "quick": quick, **X.setting(quick), "densities": dict(im["densities"])}
     return Rows(rows, columns=X.CANOPY_COLUMNS, arrays=arrays, meta=meta)
@@ -154,3 +163,6 @@ def _reeves_blau(subfig, rows):
     axes[0].set_title("(c) Eq. 6 against Reeves-Blau, each parameter fitted (1-D least squares): RMSE",
                       fontsize=10)
     axes[1].set_title("(c) ... and correlation (the paper's \"richer visual detail\")", fontsize=10)
+
+
+make = deprecated_make(__name__)

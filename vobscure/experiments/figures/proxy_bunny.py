@@ -18,7 +18,7 @@ seconds).
 
 from __future__ import annotations
 
-from ._common import Rows
+from ._common import Rows, deprecated_make
 
 __all__ = ["measure", "plot", "COLUMNS"]
 
@@ -73,3 +73,6 @@ def plot(rows, fig) -> None:
                  "meshes folder.", ha="center", fontsize=11)
     fig.suptitle(f"Sphere-set proxies (inscribed, k-means) against the mesh: cosine AO, {s['proxy_rays']} rays "
                  f"per point for the truth, seed {s['seed']}{', quick' if s['quick'] else ''}", fontsize=12)
+
+
+make = deprecated_make(__name__)

@@ -24,7 +24,7 @@ Scenes using Spherical Harmonic Exponentiation", SIGGRAPH 2006.
 
 from __future__ import annotations
 
-from ._common import Rows
+from ._common import Rows, deprecated_make
 
 __all__ = ["measure", "plot", "COLUMNS"]
 
@@ -122,3 +122,6 @@ def plot(rows, fig) -> None:
     fig.suptitle(f"Ren et al. 2006 sphere sets in SH against the exact union ({s['union_rays']} rays per point, "
                  f"scales {', '.join(map(str, s['scales']))}, seed {s['seed']}{', quick' if s['quick'] else ''})",
                  fontsize=12)
+
+
+make = deprecated_make(__name__)

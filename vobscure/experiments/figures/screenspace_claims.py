@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, claims_measurements
+from ._common import Rows, claims_measurements, deprecated_make
 
 __all__ = ["measure", "plot"]
 
@@ -152,3 +152,4 @@ def _scatter_row(subfig, rows):
     subfig.legend(handles=handles, loc="outside lower center", ncol=6, fontsize=9.5, frameon=False)
 
 
+make = deprecated_make(__name__)
