@@ -201,3 +201,26 @@ def make_all(out_dir, quick: bool = False, names=None, *, progress: bool = False
     ``Profile(quick=quick)``."""
     chosen = globals()["names"]() if names is None else names
     return make(chosen, out_dir, Profile(quick=bool(quick)), progress=progress)
+
+
+def deprecated_make(module_name: str):
+    """The deprecated ``make(out_dir, quick=False, *, seed=0)`` of the figure module
+    ``module_name`` (its ``__name__``): a ``DeprecationWarning`` naming ``vobscure figures
+    NAME`` and :func:`vobscure.experiments.figures.make`, then that driver on the one figure at
+    ``Profile(quick=quick, seed=seed)``; returns the files written.
+
+    A figure module keeps its old entry point as the one line ``make = deprecated_make(__name__)``.
+    """
+    name = module_name.rpartition(".")[2]
+
+    def deprecated(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
+        warnings.warn(f"{module_name}.make(out_dir, quick) is deprecated; use `vobscure figures {name}` or "
+                      f"vobscure.experiments.figures.make({name!r}, out_dir, profile)",
+                      DeprecationWarning, stacklevel=2)
+        return make(name, out_dir, Profile(quick=quick, seed=seed))
+
+    deprecated.__name__ = deprecated.__qualname__ = "make"
+    deprecated.__module__, deprecated.__doc__ = module_name, (
+        f"Deprecated: ``vobscure figures {name}``, or :func:`vobscure.experiments.figures.make` "
+        f"``({name!r}, out_dir, Profile(quick=quick, seed=seed))``, which this runs after a warning.")
+    return deprecated

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import json
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,7 +22,7 @@ from ..common import write_csv
 __all__ = ["BACKGROUND", "FULL_SIZE", "QUICK_SIZE", "CSV_DIGITS", "SCENE_NAMES", "Profile", "Rows",
            "write_rows", "read_rows", "claims_measurements", "tree_measurements", "compare_rows", "per_scene",
            "image_panel", "error_panel", "pixel_rmse", "log_log", "corr", "fmt",
-           "deprecated_make"]
+           "stacked", "fitted_points_title"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
@@ -260,6 +259,21 @@ def error_panel(ax, estimate, truth, title=None, *, limit=0.5, fontsize=9.5):
     return image_panel(ax, diff, title, vmin=-limit, vmax=limit, cmap="RdBu", fontsize=fontsize)
 
 
+def stacked(fig, rows, panels, height_ratios, *, hspace: float = 0.03) -> None:
+    """Draw ``panel(subfigure, rows)`` for each of ``panels`` in its own band of ``fig``, top to
+    bottom, the bands' heights in ``height_ratios``."""
+    parts = fig.subfigures(len(panels), 1, height_ratios=height_ratios, hspace=hspace)
+    for part, panel in zip(parts, panels):
+        panel(part, rows)
+
+
+def fitted_points_title(meta, per: str) -> str:
+    """The run of a tree figure fitted at points, for its title: points per ``per`` (half
+    fitted, half scored), the ground truth's rays, the seed, and whether it is quick."""
+    return (f"{meta['points']} points per {per}, half fitted, half scored; ground truth {meta['truth_rays']} rays, "
+            f"seed {meta['seed']}{', quick' if meta['quick'] else ''}")
+
+
 def pixel_rmse(model, truth) -> float:
     """RMSE over the pixels finite in both images; NaN if none."""
     model, truth = np.asarray(model, dtype=np.float64), np.asarray(truth, dtype=np.float64)
@@ -295,27 +309,3 @@ def corr(a, b, mask=None) -> float:
 def fmt(x, digits: int = 3) -> str:
     """A float for a title or table cell: fixed ``digits``, "nan" when not finite."""
     return "nan" if x is None or not np.isfinite(x) else f"{x:.{digits}f}"
-
-
-def deprecated_make(module_name: str):
-    """The deprecated ``make(out_dir, quick=False, *, seed=0)`` of the figure module
-    ``module_name`` (its ``__name__``): a ``DeprecationWarning`` naming ``vobscure figures
-    NAME`` and :func:`vobscure.experiments.figures.make`, then that driver on the one figure at
-    ``Profile(quick=quick, seed=seed)``; returns the files written.
-
-    A figure module keeps its old entry point as the one line ``make = deprecated_make(__name__)``.
-    """
-    name = module_name.rpartition(".")[2]
-
-    def make(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
-        warnings.warn(f"{module_name}.make(out_dir, quick) is deprecated; use `vobscure figures {name}` or "
-                      f"vobscure.experiments.figures.make({name!r}, out_dir, profile)",
-                      DeprecationWarning, stacklevel=2)
-        from . import make as make_figures
-
-        return make_figures(name, out_dir, Profile(quick=quick, seed=seed))
-
-    make.__module__, make.__doc__ = module_name, (
-        f"Deprecated: ``vobscure figures {name}``, or :func:`vobscure.experiments.figures.make` "
-        f"``({name!r}, out_dir, Profile(quick=quick, seed=seed))``, which this runs after a warning.")
-    return make

@@ -24,7 +24,8 @@ I3D 2006, Sec. 3 (Eqs. 4-8, the Poisson argument).
 
 from __future__ import annotations
 
-from ._common import Rows, deprecated_make, tree_measurements
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot", "SCENES"]
 
@@ -42,14 +43,7 @@ def measure(profile, *, trees=None) -> Rows:
     """The rows of :func:`vobscure.experiments.trees.poisson_rows` and the per-pixel images of
     panel (a) (:func:`~vobscure.experiments.trees.poisson_images`, bounding sphere, cosine
     reference); quick: few points, rays and pixels.
-
-    Parameters
-    ----------
-    profile : Profile
-        Quick or full, and the seed.
-    trees : vobscure.experiments.trees.Measurements, optional
-        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
-    """
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed

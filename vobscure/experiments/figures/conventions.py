@@ -21,7 +21,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ._common import BACKGROUND, Rows, deprecated_make
+from . import deprecated_make
+from ._common import BACKGROUND, Rows
 
 __all__ = ["measure", "plot", "CAMERA", "RADIUS"]
 

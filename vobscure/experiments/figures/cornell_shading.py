@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make
+from . import deprecated_make
+from ._common import Rows
 
 __all__ = ["measure", "plot", "WALL_COLOURS", "SHOWN_ALBEDO"]
 

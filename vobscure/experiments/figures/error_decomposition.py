@@ -21,7 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import compare_rows, deprecated_make, per_scene as _per_scene
+from . import deprecated_make
+from ._common import compare_rows, per_scene as _per_scene
 
 __all__ = ["measure", "plot", "markdown", "METHODS", "SCENES", "TERMS"]
 

@@ -60,7 +60,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._common import Rows, deprecated_make
+from . import deprecated_make
+from ._common import Rows
 
 __all__ = ["measure", "plot", "goal", "markdown", "METHODS", "VARIANTS", "LINE_COUNTS", "POINT_COUNTS",
            "PAPER_COUNTS", "LIMIT_LINES", "GOAL", "GOAL_Z", "HEADLINE"]

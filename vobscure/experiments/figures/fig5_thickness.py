@@ -37,7 +37,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ._common import Rows, claims_measurements, deprecated_make
+from . import deprecated_make
+from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot", "THICKNESS_SHOWN", "METHODS"]
 

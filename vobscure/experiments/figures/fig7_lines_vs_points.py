@@ -37,7 +37,8 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 5.1, Table 1 and Fig. 7.
 
 from __future__ import annotations
 
-from ._common import Rows, claims_measurements, deprecated_make
+from . import deprecated_make
+from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot", "PAIRS"]
 

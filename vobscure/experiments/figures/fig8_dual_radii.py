@@ -34,7 +34,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ._common import Rows, deprecated_make
+from . import deprecated_make
+from ._common import Rows
 
 __all__ = ["measure", "plot", "RADII", "SAMPLES", "MODES", "PROFILE_ROW"]
 

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make, tree_measurements
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -43,14 +44,7 @@ FIGSIZE = (16.0, 11.0)
 def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.grass_rows` and, for panel (a), every
     point's relative height, Eq. 9 and the ground truth (quick: few points and rays).
-
-    Parameters
-    ----------
-    profile : Profile
-        Quick or full, and the seed.
-    trees : vobscure.experiments.trees.Measurements, optional
-        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
-    """
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed

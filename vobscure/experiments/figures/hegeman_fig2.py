@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make, tree_measurements
+from . import deprecated_make
+from ._common import Rows, fitted_points_title, stacked, tree_measurements
 
 __all__ = ["measure", "plot", "SCENES"]
 
@@ -46,14 +47,7 @@ def measure(profile, *, trees=None) -> Rows:
     """Eq. 6 on the two leaf clouds: rows of :func:`vobscure.experiments.trees.canopy_rows`
     (bounding sphere and ellipsoid), the per-pixel images of panel (a) (quick: 40 x 40, 32
     rays; full: 128 x 128, 256) and the scored points of panel (b).
-
-    Parameters
-    ----------
-    profile : Profile
-        Quick or full, and the seed.
-    trees : vobscure.experiments.trees.Measurements, optional
-        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
-    """
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
@@ -80,14 +74,9 @@ def measure(profile, *, trees=None) -> Rows:
 
 def plot(rows, fig) -> None:
     """(a) per pixel, (b) at the scored points, (c) RMSE per density source."""
-    s = rows.meta
-    top, middle, bottom = fig.subfigures(3, 1, height_ratios=[0.72, 1.0, 0.85], hspace=0.03)
-    _images(top, rows)
-    _scatter(middle, rows)
-    _bars(bottom, rows)
-    fig.suptitle(f"Hegeman et al. 2006, Fig. 2: Eq. 6 on leaf clouds ({s['points']} points per cloud, "
-                 f"half fitted, half scored; ground truth {s['truth_rays']} rays, seed {s['seed']}"
-                 f"{', quick' if s['quick'] else ''})", fontsize=13)
+    stacked(fig, rows, (_images, _scatter, _bars), [0.72, 1.0, 0.85])
+    fig.suptitle(f"Hegeman et al. 2006, Fig. 2: Eq. 6 on leaf clouds ({fitted_points_title(rows.meta, 'cloud')})",
+                 fontsize=13)
 
 
 def _images(subfig, rows):

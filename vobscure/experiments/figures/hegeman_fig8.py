@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make, tree_measurements
+from . import deprecated_make
+from ._common import Rows, fitted_points_title, stacked, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -44,14 +45,7 @@ def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.canopy_rows` with a fitted or predicted
     parameter, and the poplar's per-pixel images of panel (a) (quick: 27 x 48, 32 rays;
     full: 72 x 128, 256).
-
-    Parameters
-    ----------
-    profile : Profile
-        Quick or full, and the seed.
-    trees : vobscure.experiments.trees.Measurements, optional
-        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
-    """
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
@@ -66,14 +60,9 @@ def measure(profile, *, trees=None) -> Rows:
 
 def plot(rows, fig) -> None:
     """(a) the poplar per pixel, (b) the shells, (c) Reeves-Blau."""
-    s = rows.meta
-    top, middle, bottom = fig.subfigures(3, 1, height_ratios=[1.05, 1.0, 1.0], hspace=0.03)
-    _images(top, rows)
-    _shells(middle, rows)
-    _reeves_blau(bottom, rows)
+    stacked(fig, rows, (_images, _shells, _reeves_blau), [1.05, 1.0, 1.0])
     fig.suptitle(f"Hegeman et al. 2006, Figs. 3, 4, 8, 12: Eq. 6 on clustered trees, its shells, and "
-                 f"Reeves-Blau ({s['points']} points per scene, half fitted, half scored; ground truth "
-                 f"{s['truth_rays']} rays, seed {s['seed']}{', quick' if s['quick'] else ''})", fontsize=12.5)
+                 f"Reeves-Blau ({fitted_points_title(rows.meta, 'scene')})", fontsize=12.5)
 
 
 def _images(subfig, rows):

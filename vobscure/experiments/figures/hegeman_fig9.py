@@ -30,7 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make, tree_measurements
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot", "MODELS"]
 
@@ -48,14 +49,7 @@ FIGSIZE = (16.0, 11.5)
 def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.ground_rows`: the ground under the trees
     (quick: three rings of eight points, few rays).
-
-    Parameters
-    ----------
-    profile : Profile
-        Quick or full, and the seed.
-    trees : vobscure.experiments.trees.Measurements, optional
-        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
-    """
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     run = tree_measurements(profile, trees)

@@ -32,7 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make, tree_measurements
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -61,14 +62,7 @@ def measure(profile, *, trees=None) -> Rows:
     :func:`~vobscure.experiments.trees.tradeoff_rows` and
     :func:`~vobscure.experiments.trees.cost_rows`, each with its ``table`` (quick: few points
     and rays, ray counts 4-16).
-
-    Parameters
-    ----------
-    profile : Profile
-        Quick or full, and the seed.
-    trees : vobscure.experiments.trees.Measurements, optional
-        The tree measurements of ``profile`` (see :mod:`vobscure.experiments.figures`).
-    """
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed

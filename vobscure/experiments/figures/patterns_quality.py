@@ -26,7 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._common import Rows, deprecated_make
+from . import deprecated_make
+from ._common import Rows
 
 __all__ = ["measure", "plot", "families", "paper_claims", "symmetry_effect", "rival_ratios", "default_choice",
            "tables", "Family", "PAPER_CLAIMS", "PANELS"]

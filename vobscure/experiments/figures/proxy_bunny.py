@@ -18,7 +18,8 @@ seconds).
 
 from __future__ import annotations
 
-from ._common import Rows, deprecated_make
+from . import deprecated_make
+from ._common import Rows
 
 __all__ = ["measure", "plot", "COLUMNS"]
 

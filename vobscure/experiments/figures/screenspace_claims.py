@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, claims_measurements, deprecated_make
+from . import deprecated_make
+from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot"]
 

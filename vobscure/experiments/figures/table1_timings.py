@@ -48,7 +48,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows, deprecated_make
+from . import deprecated_make
+from ._common import Rows
 
 __all__ = ["measure", "plot", "PAPER_TABLE1", "PAPER_BLUR_MS",
            "PAPER_RESOLUTION", "COLUMNS", "HORIZON_COLUMNS", "BASELINE", "paper_ratios"]

@@ -18,7 +18,8 @@ table of ``docs/figures.md`` as ``temporal_stability.md``.
 
 from __future__ import annotations
 
-from ._common import compare_rows, deprecated_make, per_scene as _per_scene
+from . import deprecated_make
+from ._common import compare_rows, per_scene as _per_scene
 
 __all__ = ["measure", "plot", "markdown", "METHODS", "SCENES"]
 
