@@ -12,8 +12,7 @@ from vobscure.experiments import trees as X
 from vobscure.experiments.common import Timing
 from vobscure.metrics import equal_error_rays
 
-#: Seed of every quick measurement here (the rows are cached per process, so the figures'
-#: quick runs in the same session reuse them).
+#: Seed of every quick measurement here (the tests share one Measurements of it, ``run``).
 SEED = 0
 #: The ray cast's RMSE at r rays against its own reported standard error: their ratio must lie
 #: within this factor of 1 (the RMSE is over few points, and the stderr of a 4-ray estimate
@@ -30,8 +29,14 @@ TIME_EXACT = 1e-12
 
 
 @pytest.fixture(scope="module")
-def rows():
-    return X.all_rows(True, seed=SEED)
+def run():
+    """The quick measurements every test here shares (those that fake the timings make their own)."""
+    return X.Measurements(True, seed=SEED)
+
+
+@pytest.fixture(scope="module")
+def rows(run):
+    return X.all_rows(True, seed=SEED, measurements=run)
 
 
 TABLES = {"canopy": X.CANOPY_COLUMNS, "ground": X.GROUND_COLUMNS, "grass": X.GRASS_COLUMNS,
@@ -138,7 +143,6 @@ def test_tradeoff_rows_with_hand_made_timings(monkeypatch):
     ``equal_rays`` is RAY_SECONDS * equal_rays per call on the tiled points, whatever the
     interpolation; the times, ratios and CPU ratios follow from the hand-made costs."""
     from vobscure.experiments import common
-    from vobscure.experiments.trees import _tradeoff
 
     def seconds(label):
         if label[0] == "raycast":
@@ -146,11 +150,7 @@ def test_tradeoff_rows_with_hand_made_timings(monkeypatch):
         return MODEL_SECONDS, MODEL_SECONDS
 
     monkeypatch.setattr(common, "time_calls", _fake_time_calls(seconds))
-    _tradeoff._convergence.cache_clear()
-    try:
-        rows = X.tradeoff_rows(True, seed=SEED)
-    finally:
-        _tradeoff._convergence.cache_clear()   # the other tests time for real
+    rows = X.tradeoff_rows(True, seed=SEED)        # its own Measurements: timed with the fake
     s = X.setting(True)
     assert rows
     for r in rows:
@@ -220,9 +220,9 @@ def test_weighting_rows_from_hand_made_rows(monkeypatch):
                    "truth_stderr": 0.04}
                   for ref, lo, hi, e in (("cosine", 0.0, 1.0, 0.11), ("uniform", 0.0, 1.0, 0.12),
                                          ("cosine", 0.0, 0.5, 0.5), ("uniform", 0.0, 0.5, 0.01))]
-    monkeypatch.setattr(_tradeoff, "canopy_rows", lambda quick, seed: canopy_rows)
-    monkeypatch.setattr(_tradeoff, "ground_rows", lambda quick, seed: ground_rows)
-    monkeypatch.setattr(_tradeoff, "grass_rows", lambda quick, seed: grass_rows)
+    monkeypatch.setattr(_tradeoff, "canopy_rows", lambda quick, seed, measurements: canopy_rows)
+    monkeypatch.setattr(_tradeoff, "ground_rows", lambda quick, seed, measurements: ground_rows)
+    monkeypatch.setattr(_tradeoff, "grass_rows", lambda quick, seed, measurements: grass_rows)
     got = X.weighting_rows(True, seed=SEED)
     want = [("tree", "leaves", "Eq. 6, sphere, fitted", 0.2, 0.1, "uniform", 0.01, 0.02),
             ("tree", "leaves", "Reeves-Blau, sphere, fitted", 0.3, 0.4, "cosine", 0.01, 0.02),
@@ -243,8 +243,8 @@ def test_ground_rows_over_all_rings_pool_the_rings(rows):
             assert pooled["rmse"] == pytest.approx(math.sqrt(mse), rel=1e-9)
 
 
-def test_grass_rows_heights_and_eq9(rows):
-    d = X.grass_data(True, seed=SEED)
+def test_grass_rows_heights_and_eq9(rows, run):
+    d = X.grass_data(True, seed=SEED, measurements=run)
     assert np.all((d["height"] >= 0) & (d["height"] <= 1))
     from vobscure.trees import grass_visibility
 
@@ -265,8 +265,8 @@ def test_main_quick_prints_every_table(capsys, tmp_path, rows):
 
 # ----------------------------------------------------------------------------- Poisson (issue 15)
 @pytest.fixture(scope="module")
-def poisson_rows():
-    return X.poisson_rows(True, seed=SEED)
+def poisson_rows(run):
+    return X.poisson_rows(True, seed=SEED, measurements=run)
 
 
 def test_poisson_rows_columns_and_coverage(poisson_rows):
@@ -281,12 +281,12 @@ def test_poisson_rows_columns_and_coverage(poisson_rows):
         (m, p) for m in ("hegeman fitted", "poisson predicted") for p in ("leaves", "foliage pixels", "ground pixels")}
 
 
-def test_poisson_extinction_is_the_leaf_statistics_alone(poisson_rows):
+def test_poisson_extinction_is_the_leaf_statistics_alone(poisson_rows, run):
     """The Poisson rows' parameter is n A / 2 of the scene's metadata and the shell: nothing
     fitted (the same value for both references)."""
     from vobscure import trees as T
 
-    d = X.canopy_data("leaf_cloud", True, seed=SEED)
+    d = X.canopy_data("leaf_cloud", True, seed=SEED, measurements=run)
     md = d["scene"].metadata
     sigma = T.extinction(md["n_leaves"], md["leaf_area"], d["shells"]["sphere"][0])
     ps = [r["parameter"] for r in poisson_rows if r["scene"] == "leaf_cloud" and r["shell"] == "sphere"
@@ -305,9 +305,9 @@ def test_poisson_beats_fitted_eq6_on_leaf_cloud_pixels(poisson_rows, scene):
         assert rs["poisson predicted"]["rmse"] < rs["hegeman fitted"]["rmse"]
 
 
-def test_ellipsoid_map_rows_columns_and_ranges():
+def test_ellipsoid_map_rows_columns_and_ranges(run):
     """The affine map's error rows: documented columns, RMSE <= max, in [0, 1]."""
-    rows = X.ellipsoid_map_rows(True, seed=SEED, scenes=("tree",))
+    rows = X.ellipsoid_map_rows(True, seed=SEED, scenes=("tree",), measurements=run)
     for r in rows:
         assert set(r) == set(X.ELLIPSOID_MAP_COLUMNS)
         assert 0.0 <= r["rmse_map"] <= r["max_map"] <= 1.0
@@ -349,7 +349,7 @@ def test_canopy_models_figure_quick(tmp_path, poisson_rows):
 
 
 # ----------------------------------------------------------------------------- the fits on the measured points
-def test_fitted_densities_are_no_worse_than_a_dense_grid():
+def test_fitted_densities_are_no_worse_than_a_dense_grid(run):
     """Every density fitted to a reference on the fit half of a scene's leaf points has a
     squared error no larger than the best of a log grid 0.01 apart over 1e-6..1e8 (an
     independent minimizer), for every shell."""
@@ -357,7 +357,7 @@ def test_fitted_densities_are_no_worse_than_a_dense_grid():
 
     grid = np.exp(np.arange(np.log(1e-6), np.log(1e8), 0.01))
     for name in X.CANOPY_SCENES:
-        d = X.canopy_data(name, True, seed=SEED)
+        d = X.canopy_data(name, True, seed=SEED, measurements=run)
         P, N = d["points"][d["fit"]], d["normals"][d["fit"]]
         for c in d["configs"]:
             if c["model"] != "hegeman" or c["source"] != "fitted":
@@ -378,3 +378,26 @@ def test_moved_names_still_work_with_a_deprecation_warning(name, where):
     with pytest.warns(DeprecationWarning, match=where):
         fn = getattr(X, name)
     assert fn is getattr(importlib.import_module(where), name)
+
+
+# ----------------------------------------------------------------------------- Measurements
+def test_measurements_are_shared_through_the_object_only(run):
+    """Functions given the same Measurements share what it keeps; without one a function
+    keeps nothing (two calls measure twice, the same numbers)."""
+    a = X.ground_data("tree", True, seed=SEED, measurements=run)
+    assert X.ground_data("tree", True, seed=SEED, measurements=run) is a
+    own, again = X.ground_data("tree", True, seed=SEED), X.ground_data("tree", True, seed=SEED)
+    assert own is not a and again is not own
+    np.testing.assert_array_equal(own["points"], a["points"])
+    np.testing.assert_array_equal(again["truth"]["cosine"].value, a["truth"]["cosine"].value)
+
+
+def test_measurements_of_another_run_are_refused(run):
+    with pytest.raises(ValueError, match="measurements are of quick=True, seed=0, not of quick=False"):
+        X.ground_rows(False, seed=SEED, measurements=run)
+    with pytest.raises(ValueError, match="seed=1"):
+        X.grass_rows(True, seed=1, measurements=run)
+    with pytest.raises(ValueError, match="measurements must be a Measurements"):
+        X.canopy_rows(True, seed=SEED, measurements={})
+    with pytest.raises(ValueError, match="seed must be an integer"):
+        X.Measurements(True, seed=-1)

@@ -208,3 +208,84 @@ def test_cli_from_csv_redraws_without_measuring(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "conventions.png").is_file()
     assert main(["figures", "fig5_thickness", "--from-csv", "--out", str(tmp_path)]) == 2
     assert "make the figure" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- shared measurements
+_SHARING_FIGURES = {
+    "_seen.py": "import weakref\nREFS = {}\nLOG = []\n",
+    "first.py": ("ORDER = 1\n"
+                 "def measure(profile, *, trees=None):\n"
+                 "    from . import _seen\n"
+                 "    _seen.REFS['first'] = _seen.weakref.ref(trees)\n"
+                 "    _seen.LOG.append(('first', trees.quick, trees.seed))\n"
+                 "    return [{'x': 1}]\n"
+                 "def plot(rows, fig):\n"
+                 "    fig.subplots()\n"),
+    "second.py": ("ORDER = 2\n"
+                  "def measure(profile, *, trees=None):\n"
+                  "    from . import _seen\n"
+                  "    _seen.LOG.append(('second', _seen.REFS['first']() is trees))\n"
+                  "    return [{'x': 2}]\n"
+                  "def plot(rows, fig):\n"
+                  "    fig.subplots()\n"),
+    "third.py": ("ORDER = 3\n"
+                 "def measure(profile):\n"
+                 "    from . import _seen\n"
+                 "    _seen.LOG.append(('third', _seen.REFS['first']() is None))\n"
+                 "    return [{'x': 3}]\n"
+                 "def plot(rows, fig):\n"
+                 "    fig.subplots()\n"),
+}
+
+
+def test_the_driver_shares_a_measurement_and_drops_it_after_its_last_user(tmp_path, monkeypatch):
+    """Two figures asking for ``trees`` get the same Measurements of the run's profile; a third
+    figure, after the last one that asks, finds it gone (no copy kept anywhere)."""
+    package = tmp_path / "sharefigs"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    for name, text in _SHARING_FIGURES.items():
+        (package / name).write_text(text)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "sharefigs", raising=False)
+
+    figures.make(["first", "second", "third"], tmp_path / "out", Profile(quick=True, seed=3), package="sharefigs")
+    log = sys.modules["sharefigs._seen"].LOG
+    assert log == [("first", True, 3), ("second", True), ("third", True)]
+
+
+def test_a_tree_figure_measured_alone_makes_its_own_measurements(quick_run):
+    """``measure`` without the driver's shared measurement gives the rows the run wrote."""
+    from vobscure.experiments.figures import _common, hegeman_fig9
+
+    out_dir, _ = quick_run
+    rows = hegeman_fig9.measure(QUICK)
+    _common.write_rows(rows, out_dir / "alone.csv")
+    assert (out_dir / "alone.csv").read_bytes() == (out_dir / "hegeman_fig9.csv").read_bytes()
+
+
+# ----------------------------------------------------------------------------- deprecated names
+@pytest.mark.parametrize("name", figures.names())
+def test_deprecated_make_of_a_figure_module_runs_the_driver(name, tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(figures, "make", lambda *args, **kw: calls.append((args, kw)) or ["written"])
+    mod = figures.module(name)
+    with pytest.warns(DeprecationWarning, match=rf"use `vobscure figures {name}` or .*figures\.make\('{name}'"):
+        assert mod.make(tmp_path, quick=True, seed=2) == ["written"]
+    assert calls == [((name, tmp_path, Profile(quick=True, seed=2)), {})]
+
+
+def test_deprecated_make_writes_the_figure(tmp_path):
+    from vobscure.experiments.figures import conventions
+
+    with pytest.warns(DeprecationWarning, match="vobscure figures conventions"):
+        paths = conventions.make(tmp_path, quick=True)
+    assert paths[-1] == tmp_path / "conventions.png" and all(p.is_file() for p in paths)
+
+
+def test_deprecated_figures_registry_maps_every_name_to_itself():
+    with pytest.warns(DeprecationWarning, match=r"figures\.names\(\)"):
+        registry = figures.FIGURES
+    assert registry == {name: name for name in figures.names()}
+    with pytest.raises(AttributeError, match="NO_SUCH_NAME"):
+        figures.NO_SUCH_NAME

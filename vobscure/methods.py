@@ -43,7 +43,7 @@ import numpy as np
 
 from .estimate import DEFAULT_GROUPS, Estimate
 from .objectspace import bunnell_gbuffer, sphere_set_gbuffer
-from .references import QUANTITIES, Quantity
+from .references import QUANTITIES, Quantity, lookup
 from .screenspace import alchemy, gtao, hbao, point_taps, sao, vo_area, vo_line, vo_point, vo_reference
 from .trees.pixels import hegeman_gbuffer, poisson_gbuffer, reeves_blau_gbuffer
 
@@ -261,10 +261,7 @@ def names(*, include_references: bool = True) -> tuple[str, ...]:
 
 def get(name: str) -> Method:
     """The method registered as ``name``; the error lists the valid names."""
-    try:
-        return _REGISTRY[name]
-    except (KeyError, TypeError):
-        raise ValueError(f"unknown method {name!r}; expected one of {', '.join(_REGISTRY)}") from None
+    return lookup(_REGISTRY, name, "method")
 
 
 def describe() -> str:

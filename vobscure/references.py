@@ -223,10 +223,16 @@ def names() -> tuple[str, ...]:
 
 def get(name: str) -> Reference:
     """The reference registered as ``name``; the error lists the valid names."""
+    return lookup(REFERENCES, name, "reference")
+
+
+def lookup(registry: dict, name, what: str):
+    """``registry[name]``, or a ValueError naming the unknown ``what`` and listing the valid names
+    (the lookup of this registry and of :mod:`vobscure.methods`')."""
     try:
-        return REFERENCES[name]
+        return registry[name]
     except (KeyError, TypeError):
-        raise ValueError(f"unknown reference {name!r}; expected one of {', '.join(REFERENCES)}") from None
+        raise ValueError(f"unknown {what} {name!r}; expected one of {', '.join(registry)}") from None
 
 
 def describe() -> str:

@@ -13,9 +13,13 @@ A figure module ``NAME.py`` in this package defines
 
 and optionally ``FIGSIZE`` (inches, default :data:`DEFAULT_FIGSIZE`), ``DPI`` (default 100), ``ORDER`` (its place in
 :func:`names`), and ``markdown(rows) -> str`` (tables for the docs, written as ``NAME.md``).
-A ``measure`` that takes a keyword ``claims`` is given the claims' measurement
-(:func:`~vobscure.experiments.figures._common.claims_measurements`), measured once per
-:func:`make` and shared by every figure of the run that asks for it.
+A ``measure`` that takes a keyword of :data:`_SHARED` is given that shared measurement, made
+once per :func:`make` (when the first figure asks for it), passed to every figure of the run
+that asks for it and dropped after the last one: ``claims``, the claims' measurement
+(:func:`~vobscure.experiments.figures._common.claims_measurements`), and ``trees``, the
+measurements of :mod:`vobscure.experiments.trees`
+(:func:`~vobscure.experiments.figures._common.tree_measurements`). Called alone, such a
+``measure`` makes its own.
 
 Figures are found by discovery: every module of this package whose name does not start with
 an underscore. :func:`names` orders them by ``ORDER`` (the paper's figures first), then by
@@ -29,9 +33,10 @@ import importlib
 import importlib.util
 import inspect
 import pkgutil
+import warnings
 from pathlib import Path
 
-from ._common import Profile, Rows, claims_measurements, read_rows, write_rows
+from ._common import Profile, Rows, claims_measurements, read_rows, tree_measurements, write_rows
 
 __all__ = ["Profile", "Rows", "DEFAULT_FIGSIZE", "names", "module", "measure", "plot", "make", "replot",
            "make_all"]
@@ -41,7 +46,17 @@ DEFAULT_FIGSIZE = (16.0, 12.0)
 #: Place in :func:`names` of a figure that sets no ``ORDER``: after the ordered ones.
 _LAST = 10 ** 6
 #: Measurements several figures share: keyword of ``measure`` -> function of the profile.
-_SHARED = {"claims": claims_measurements}
+_SHARED = {"claims": claims_measurements, "trees": tree_measurements}
+
+
+def __getattr__(name: str):
+    """``FIGURES`` (every figure name mapped to itself), deprecated: a ``DeprecationWarning``
+    naming :func:`names`, which lists the figures."""
+    if name == "FIGURES":
+        warnings.warn("vobscure.experiments.figures.FIGURES is deprecated; use "
+                      "vobscure.experiments.figures.names()", DeprecationWarning, stacklevel=2)
+        return {n: n for n in names()}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def names(package: str = __name__) -> list[str]:
@@ -186,3 +201,26 @@ def make_all(out_dir, quick: bool = False, names=None, *, progress: bool = False
     ``Profile(quick=quick)``."""
     chosen = globals()["names"]() if names is None else names
     return make(chosen, out_dir, Profile(quick=bool(quick)), progress=progress)
+
+
+def deprecated_make(module_name: str):
+    """The deprecated ``make(out_dir, quick=False, *, seed=0)`` of the figure module
+    ``module_name`` (its ``__name__``): a ``DeprecationWarning`` naming ``vobscure figures
+    NAME`` and :func:`vobscure.experiments.figures.make`, then that driver on the one figure at
+    ``Profile(quick=quick, seed=seed)``; returns the files written.
+
+    A figure module keeps its old entry point as the one line ``make = deprecated_make(__name__)``.
+    """
+    name = module_name.rpartition(".")[2]
+
+    def deprecated(out_dir, quick: bool = False, *, seed: int = 0) -> list[Path]:
+        warnings.warn(f"{module_name}.make(out_dir, quick) is deprecated; use `vobscure figures {name}` or "
+                      f"vobscure.experiments.figures.make({name!r}, out_dir, profile)",
+                      DeprecationWarning, stacklevel=2)
+        return make(name, out_dir, Profile(quick=quick, seed=seed))
+
+    deprecated.__name__ = deprecated.__qualname__ = "make"
+    deprecated.__module__, deprecated.__doc__ = module_name, (
+        f"Deprecated: ``vobscure figures {name}``, or :func:`vobscure.experiments.figures.make` "
+        f"``({name!r}, out_dir, Profile(quick=quick, seed=seed))``, which this runs after a warning.")
+    return deprecated

@@ -1,6 +1,6 @@
 """What the figure modules share: the :class:`Profile` they are measured at, the
-:class:`Rows` they measure, the files those are written to and read back from, the claims'
-measurement that several figures draw, and the image panels.
+:class:`Rows` they measure, the files those are written to and read back from, the
+measurements that several figures draw (the claims', the trees'), and the image panels.
 
 The writers, the timer, the default radius and the machine record are those of
 :mod:`vobscure.experiments.common` (one copy for every experiment); this module holds what
@@ -20,8 +20,9 @@ import numpy as np
 from ..common import write_csv
 
 __all__ = ["BACKGROUND", "FULL_SIZE", "QUICK_SIZE", "CSV_DIGITS", "SCENE_NAMES", "Profile", "Rows",
-           "write_rows", "read_rows", "claims_measurements", "compare_rows", "per_scene", "image_panel",
-           "error_panel", "pixel_rmse", "log_log", "corr", "fmt"]
+           "write_rows", "read_rows", "claims_measurements", "tree_measurements", "compare_rows", "per_scene",
+           "image_panel", "error_panel", "pixel_rmse", "log_log", "corr", "fmt",
+           "stacked", "fitted_points_title"]
 
 #: Colour of background pixels (NaN) in every image panel, as in the other figures.
 BACKGROUND = "#e377c2"
@@ -206,6 +207,19 @@ def claims_measurements(profile: Profile) -> dict:
             for scene in claims.SCENES}
 
 
+def tree_measurements(profile: Profile, given=None):
+    """The :class:`vobscure.experiments.trees.Measurements` of ``profile`` (its quick and
+    seed): ``given`` when there is one, else a new one, which measures when first asked.
+
+    Figures that draw the tree measurements take it as the keyword ``trees`` of their
+    ``measure``; the driver (:func:`vobscure.experiments.figures.make`) makes one per run and
+    passes it to each, so that they share the points, ground truths and timings.
+    """
+    from .. import trees
+
+    return trees.Measurements(profile.quick, seed=profile.seed) if given is None else given
+
+
 def compare_rows(scenes, columns, *, extra=None, **options) -> Rows:
     """The rows of :func:`vobscure.experiments.compare.compare` (``options``; no progress, no
     files) for each scene, each row with its ``scene`` and the ``extra`` keys, as :class:`Rows`
@@ -243,6 +257,21 @@ def error_panel(ax, estimate, truth, title=None, *, limit=0.5, fontsize=9.5):
     """Signed error ``estimate - truth`` in a diverging map (blue: too open, red: too dark)."""
     diff = np.asarray(estimate, dtype=np.float64) - np.asarray(truth, dtype=np.float64)
     return image_panel(ax, diff, title, vmin=-limit, vmax=limit, cmap="RdBu", fontsize=fontsize)
+
+
+def stacked(fig, rows, panels, height_ratios, *, hspace: float = 0.03) -> None:
+    """Draw ``panel(subfigure, rows)`` for each of ``panels`` in its own band of ``fig``, top to
+    bottom, the bands' heights in ``height_ratios``."""
+    parts = fig.subfigures(len(panels), 1, height_ratios=height_ratios, hspace=hspace)
+    for part, panel in zip(parts, panels):
+        panel(part, rows)
+
+
+def fitted_points_title(meta, per: str) -> str:
+    """The run of a tree figure fitted at points, for its title: points per ``per`` (half
+    fitted, half scored), the ground truth's rays, the seed, and whether it is quick."""
+    return (f"{meta['points']} points per {per}, half fitted, half scored; ground truth {meta['truth_rays']} rays, "
+            f"seed {meta['seed']}{', quick' if meta['quick'] else ''}")
 
 
 def pixel_rmse(model, truth) -> float:

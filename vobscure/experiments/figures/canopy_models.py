@@ -24,7 +24,8 @@ I3D 2006, Sec. 3 (Eqs. 4-8, the Poisson argument).
 
 from __future__ import annotations
 
-from ._common import Rows
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot", "SCENES"]
 
@@ -38,18 +39,21 @@ SCENES = (("leaf_cloud", "sparse leaf cloud"), ("leaf_cloud_dense", "dense leaf 
 _COLORS = {"hegeman fitted": "#1f77b4", "poisson predicted": "#d62728"}
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """The rows of :func:`vobscure.experiments.trees.poisson_rows` and the per-pixel images of
     panel (a) (:func:`~vobscure.experiments.trees.poisson_images`, bounding sphere, cosine
-    reference); quick: few points, rays and pixels."""
+    reference); quick: few points, rays and pixels.
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
-    rows = X.poisson_rows(quick, seed=seed)
+    run = tree_measurements(profile, trees)
+    rows = X.poisson_rows(quick, seed=seed, measurements=run)
     arrays, meta = {}, {"seed": seed, "quick": quick, **X.setting(quick), "pixels": dict(X.POISSON_PIXELS[quick]),
                         "images": {}}
     for name, _ in SCENES:
-        im = X.poisson_images(name, shell="sphere", reference="cosine", quick=quick, seed=seed)
+        im = X.poisson_images(name, shell="sphere", reference="cosine", quick=quick, seed=seed,
+                              measurements=run)
         for key in ("truth", "hegeman", "poisson"):
             arrays[f"{name}|{key}"] = im[key]
         meta["images"][name] = {"rays": im["rays"], "density": im["density"], "sigma": im["sigma"]}
@@ -120,3 +124,6 @@ def _bars(subfig, rows):
     subfig.suptitle("RMSE per scene and shell; '_uniform': a uniform leaf cloud with the tree's leaf count, "
                     "leaf size and shell (the error without clustering); black ticks: the ground truth's stderr",
                     fontsize=10.5)
+
+
+make = deprecated_make(__name__)

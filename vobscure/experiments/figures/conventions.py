@@ -21,6 +21,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import BACKGROUND, Rows
 
 __all__ = ["measure", "plot", "CAMERA", "RADIUS"]
@@ -446,3 +447,6 @@ def _panel_closed_forms(ax, check, quick):
     ax.set_ylabel("visibility (1 = open)")
     ax.legend(loc="lower right", fontsize=8.5, framealpha=0.95)
     ax.set_title("closed forms for the crease floor (DESIGN.md, Testing)", fontsize=11)
+
+
+make = deprecated_make(__name__)

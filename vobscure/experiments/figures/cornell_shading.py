@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "WALL_COLOURS", "SHOWN_ALBEDO"]
@@ -144,3 +145,6 @@ def plot(rows, fig) -> None:
     fig.suptitle(f"Cornell box: ambient terms of RTR 9.2 (top) and interreflection corrections against "
                  f"path tracing (bottom), {valid.shape[1]}x{valid.shape[0]} px, {meta['rays']} rays",
                  fontsize=10)
+
+
+make = deprecated_make(__name__)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import compare_rows, per_scene as _per_scene
 
 __all__ = ["measure", "plot", "markdown", "METHODS", "SCENES", "TERMS"]
@@ -88,3 +89,6 @@ def markdown(rows) -> str:
                            for t in _TERMS4)
         lines.append(f"| {r['scene']} | {r['method']} {r['samples']} | {cells} |")
     return "\n".join(lines)
+
+
+make = deprecated_make(__name__)

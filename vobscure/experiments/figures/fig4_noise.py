@@ -60,6 +60,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "goal", "markdown", "METHODS", "VARIANTS", "LINE_COUNTS", "POINT_COUNTS",
@@ -567,3 +568,6 @@ def markdown(rows, *, command=None, seconds=None) -> str:
                 cells.append(" / ".join(_f(sel[m]["rmse_ref"]) if m in sel else "" for m in METHODS))
             lines.append(f"| {n} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+make = deprecated_make(__name__)

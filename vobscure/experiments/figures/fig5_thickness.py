@@ -37,6 +37,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot", "THICKNESS_SHOWN", "METHODS"]
@@ -239,3 +240,6 @@ def _plots(subfig, rows, radius):
                 Line2D([], [], color="0.3", ls="", marker="o", ms=7,
                        label="thickness off (left of the line)")]
     subfig.legend(handles=handles, loc="outside lower center", ncol=5, fontsize=9.5, frameon=False)
+
+
+make = deprecated_make(__name__)

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot", "IMAGE_CONFIGS", "BAR_CONFIGS"]
@@ -197,3 +198,6 @@ def _bars(subfig, rows, letters):
                Line2D([], [], ls="", marker="_", color="#d62728", ms=14, mew=2.5,
                       label="the ground truth's own correlation with AO")]
     subfig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=9.5, frameon=False)
+
+
+make = deprecated_make(__name__)

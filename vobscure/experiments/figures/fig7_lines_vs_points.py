@@ -37,6 +37,7 @@ Loos & Sloan, "Volumetric Obscurance", I3D 2010, Sec. 5.1, Table 1 and Fig. 7.
 
 from __future__ import annotations
 
+from . import deprecated_make
 from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot", "PAIRS"]
@@ -198,3 +199,6 @@ def _curves(subfig, rows, scenes):
                Line2D([], [], ls="", marker="$n$", color="0.3",
                       label="n = samples (= depth taps per pixel,\nless an odd point pattern's centre)")]
     subfig.legend(handles=handles, loc="outside lower center", ncol=5, fontsize=9.5, frameon=False)
+
+
+make = deprecated_make(__name__)

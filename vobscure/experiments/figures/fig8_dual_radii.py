@@ -34,6 +34,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "RADII", "SAMPLES", "MODES", "PROFILE_ROW"]
@@ -206,3 +207,6 @@ def _plots(subfig, est, truth, rows, row):
     bx.grid(True, axis="y", color="0.9", lw=0.6, zorder=0)
     bx.legend(fontsize=8.5, loc="upper center", ncol=3, framealpha=0.9)
     bx.set_title("(d) what each image captures", fontsize=11)
+
+
+make = deprecated_make(__name__)

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -40,14 +41,16 @@ ORDER = 140
 FIGSIZE = (16.0, 11.0)
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.grass_rows` and, for panel (a), every
-    point's relative height, Eq. 9 and the ground truth (quick: few points and rays)."""
+    point's relative height, Eq. 9 and the ground truth (quick: few points and rays).
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
-    rows = X.grass_rows(quick, seed=seed)
-    d = X.grass_data(quick, seed=seed)
+    run = tree_measurements(profile, trees)
+    rows = X.grass_rows(quick, seed=seed, measurements=run)
+    d = X.grass_data(quick, seed=seed, measurements=run)
     arrays = {"height": d["height"], "model": d["model"],
               **{f"truth|{w}": np.asarray(d["truth"][w].value) for w in ("cosine", "uniform")}}
     meta = {"seed": seed, "quick": quick, **X.setting(quick)}
@@ -136,3 +139,6 @@ def _errors(ax, rows):
     ax.grid(True, color="0.92")
     ax.legend(fontsize=7.5, loc="best")
     ax.set_title("(c) Eq. 9's RMSE and bias per height bin", fontsize=10)
+
+
+make = deprecated_make(__name__)

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows
+from . import deprecated_make
+from ._common import Rows, fitted_points_title, stacked, tree_measurements
 
 __all__ = ["measure", "plot", "SCENES"]
 
@@ -42,23 +43,25 @@ ORDER = 110
 FIGSIZE = (16.0, 12.5)
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """Eq. 6 on the two leaf clouds: rows of :func:`vobscure.experiments.trees.canopy_rows`
     (bounding sphere and ellipsoid), the per-pixel images of panel (a) (quick: 40 x 40, 32
-    rays; full: 128 x 128, 256) and the scored points of panel (b)."""
+    rays; full: 128 x 128, 256) and the scored points of panel (b).
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
+    run = tree_measurements(profile, trees)
     names = [n for n, _ in SCENES]
-    rows = [r for r in X.canopy_rows(quick, seed=seed, scenes=names) if r["model"] == "hegeman"
+    rows = [r for r in X.canopy_rows(quick, seed=seed, scenes=names, measurements=run) if r["model"] == "hegeman"
             and r["shell"] in ("sphere", "ellipsoid")]
     arrays, meta = {}, {"seed": seed, "quick": quick, **X.setting(quick), "density": {}, "parameter": {}}
     for name, _ in SCENES:
         im = X.canopy_images(name, size=profile.pick((40, 40), (128, 128)), rays=profile.pick(32, 256),
-                             seed=seed, quick=quick)
+                             seed=seed, quick=quick, measurements=run)
         arrays[f"{name}|truth"], arrays[f"{name}|model"] = im["truth"], im["model"]
         meta["density"][name] = im["density"]
-        d = X.canopy_data(name, quick, seed=seed)
+        d = X.canopy_data(name, quick, seed=seed, measurements=run)
         for w in ("cosine", "uniform"):
             arrays[f"{name}|{w}|truth"] = np.asarray(d["truth"][w].value)[d["score"]]
             for source in ("fitted", "predicted"):
@@ -71,14 +74,9 @@ def measure(profile) -> Rows:
 
 def plot(rows, fig) -> None:
     """(a) per pixel, (b) at the scored points, (c) RMSE per density source."""
-    s = rows.meta
-    top, middle, bottom = fig.subfigures(3, 1, height_ratios=[0.72, 1.0, 0.85], hspace=0.03)
-    _images(top, rows)
-    _scatter(middle, rows)
-    _bars(bottom, rows)
-    fig.suptitle(f"Hegeman et al. 2006, Fig. 2: Eq. 6 on leaf clouds ({s['points']} points per cloud, "
-                 f"half fitted, half scored; ground truth {s['truth_rays']} rays, seed {s['seed']}"
-                 f"{', quick' if s['quick'] else ''})", fontsize=13)
+    stacked(fig, rows, (_images, _scatter, _bars), [0.72, 1.0, 0.85])
+    fig.suptitle(f"Hegeman et al. 2006, Fig. 2: Eq. 6 on leaf clouds ({fitted_points_title(rows.meta, 'cloud')})",
+                 fontsize=13)
 
 
 def _images(subfig, rows):
@@ -150,3 +148,6 @@ def _bars(subfig, rows):
         ax.set_ylim(0, max(0.05, 1.15 * max(r["rmse"] for r in rows if r["reference"] == w)))
         ax.legend(fontsize=8.5, title="density", title_fontsize=8.5, loc="upper left")
         ax.grid(True, axis="y", color="0.9")
+
+
+make = deprecated_make(__name__)

@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows
+from . import deprecated_make
+from ._common import Rows, fitted_points_title, stacked, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -40,16 +41,18 @@ ORDER = 120
 FIGSIZE = (17.0, 13.0)
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.canopy_rows` with a fitted or predicted
     parameter, and the poplar's per-pixel images of panel (a) (quick: 27 x 48, 32 rays;
-    full: 72 x 128, 256)."""
+    full: 72 x 128, 256).
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
-    rows = [r for r in X.canopy_rows(quick, seed=seed) if r["source"] in ("fitted", "predicted")]
+    run = tree_measurements(profile, trees)
+    rows = [r for r in X.canopy_rows(quick, seed=seed, measurements=run) if r["source"] in ("fitted", "predicted")]
     im = X.canopy_images("tree_poplar", size=profile.pick((27, 48), (72, 128)), rays=profile.pick(32, 256),
-                         seed=seed, quick=quick, shells=("sphere", "ellipsoid"))
+                         seed=seed, quick=quick, shells=("sphere", "ellipsoid"), measurements=run)
     arrays = {"truth": im["truth"], **{f"model|{k}": v for k, v in im["models"].items()}}
     meta = {"seed": seed, "quick": quick, **X.setting(quick), "densities": dict(im["densities"])}
     return Rows(rows, columns=X.CANOPY_COLUMNS, arrays=arrays, meta=meta)
@@ -57,14 +60,9 @@ def measure(profile) -> Rows:
 
 def plot(rows, fig) -> None:
     """(a) the poplar per pixel, (b) the shells, (c) Reeves-Blau."""
-    s = rows.meta
-    top, middle, bottom = fig.subfigures(3, 1, height_ratios=[1.05, 1.0, 1.0], hspace=0.03)
-    _images(top, rows)
-    _shells(middle, rows)
-    _reeves_blau(bottom, rows)
+    stacked(fig, rows, (_images, _shells, _reeves_blau), [1.05, 1.0, 1.0])
     fig.suptitle(f"Hegeman et al. 2006, Figs. 3, 4, 8, 12: Eq. 6 on clustered trees, its shells, and "
-                 f"Reeves-Blau ({s['points']} points per scene, half fitted, half scored; ground truth "
-                 f"{s['truth_rays']} rays, seed {s['seed']}{', quick' if s['quick'] else ''})", fontsize=12.5)
+                 f"Reeves-Blau ({fitted_points_title(rows.meta, 'scene')})", fontsize=12.5)
 
 
 def _images(subfig, rows):
@@ -154,3 +152,6 @@ def _reeves_blau(subfig, rows):
     axes[0].set_title("(c) Eq. 6 against Reeves-Blau, each parameter fitted (1-D least squares): RMSE",
                       fontsize=10)
     axes[1].set_title("(c) ... and correlation (the paper's \"richer visual detail\")", fontsize=10)
+
+
+make = deprecated_make(__name__)

@@ -30,7 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot", "MODELS"]
 
@@ -45,13 +46,16 @@ ORDER = 130
 FIGSIZE = (16.0, 11.5)
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """Rows of :func:`vobscure.experiments.trees.ground_rows`: the ground under the trees
-    (quick: three rings of eight points, few rays)."""
+    (quick: three rings of eight points, few rays).
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
+    run = tree_measurements(profile, trees)
     meta = {"seed": profile.seed, "quick": profile.quick, **X.setting(profile.quick)}
-    return Rows(X.ground_rows(profile.quick, seed=profile.seed), columns=X.GROUND_COLUMNS, meta=meta)
+    return Rows(X.ground_rows(profile.quick, seed=profile.seed, measurements=run), columns=X.GROUND_COLUMNS,
+                meta=meta)
 
 
 def plot(rows, fig) -> None:
@@ -113,3 +117,6 @@ def _curves(subfig, rows, what):
         handles += [Line2D([], [], color="k", ls=":", label="ground truth's stderr (per point)")]
         subfig.suptitle("(b) RMSE over each ring's points against the distance from the trunk", fontsize=11)
     subfig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=9, frameon=False)
+
+
+make = deprecated_make(__name__)

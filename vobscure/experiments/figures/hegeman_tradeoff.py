@@ -32,7 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import Rows
+from . import deprecated_make
+from ._common import Rows, tree_measurements
 
 __all__ = ["measure", "plot"]
 
@@ -56,16 +57,19 @@ ORDER = 150
 FIGSIZE = (17.0, 16.0)
 
 
-def measure(profile) -> Rows:
+def measure(profile, *, trees=None) -> Rows:
     """The rows of :func:`vobscure.experiments.trees.convergence_rows`,
     :func:`~vobscure.experiments.trees.tradeoff_rows` and
     :func:`~vobscure.experiments.trees.cost_rows`, each with its ``table`` (quick: few points
-    and rays, ray counts 4-16)."""
+    and rays, ray counts 4-16).
+    ``trees``: the run's shared tree measurements (:mod:`vobscure.experiments.figures`)."""
     from .. import trees as X
 
     quick, seed = profile.quick, profile.seed
-    conv, trade, cost = (X.convergence_rows(quick, seed=seed), X.tradeoff_rows(quick, seed=seed),
-                         X.cost_rows(quick, seed=seed))
+    run = tree_measurements(profile, trees)
+    conv, trade, cost = (X.convergence_rows(quick, seed=seed, measurements=run),
+                         X.tradeoff_rows(quick, seed=seed, measurements=run),
+                         X.cost_rows(quick, seed=seed, measurements=run))
     table = ([{"table": "convergence", **r} for r in conv] + [{"table": "tradeoff", **r} for r in trade]
              + [{"table": "cost", **r} for r in cost])
     meta = {"seed": seed, "quick": quick, **X.setting(quick)}
@@ -174,3 +178,6 @@ def _cost(ax, cost):
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(True, axis="y", which="both", color="0.92")
     ax.set_axisbelow(True)
+
+
+make = deprecated_make(__name__)

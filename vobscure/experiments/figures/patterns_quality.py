@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "families", "paper_claims", "symmetry_effect", "rival_ratios", "default_choice",
@@ -405,3 +406,6 @@ def plot(rows, fig) -> None:
     fig.suptitle(f"Sample-pattern quality: RMS error of the VO estimate over random planes and creases "
                  f"(vobscure.patterns.quality, {s['trials']} trials, seed {s['seed']}); error bars 2 stderr",
                  fontsize=12)
+
+
+make = deprecated_make(__name__)

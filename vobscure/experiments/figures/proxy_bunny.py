@@ -18,6 +18,7 @@ seconds).
 
 from __future__ import annotations
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "COLUMNS"]
@@ -73,3 +74,6 @@ def plot(rows, fig) -> None:
                  "meshes folder.", ha="center", fontsize=11)
     fig.suptitle(f"Sphere-set proxies (inscribed, k-means) against the mesh: cosine AO, {s['proxy_rays']} rays "
                  f"per point for the truth, seed {s['seed']}{', quick' if s['quick'] else ''}", fontsize=12)
+
+
+make = deprecated_make(__name__)

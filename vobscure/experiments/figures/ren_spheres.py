@@ -24,6 +24,7 @@ Scenes using Spherical Harmonic Exponentiation", SIGGRAPH 2006.
 
 from __future__ import annotations
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "COLUMNS"]
@@ -69,12 +70,7 @@ def plot(rows, fig) -> None:
         rs = [r for r in rows["count"] if (r["method"], r["exp"]) == ("product", "") and r["order"] == order]
         ax.plot([r["count"] for r in rs], [r["ref_stderr"] for r in rs], color="0.6", ls=":", lw=1,
                 label="union reference stderr")
-        ax.set_xscale("log", base=2)
-        ax.set_yscale("log")
-        ax.set_xlabel("spheres")
-        ax.set_ylabel("RMSE against the exact union")
-        ax.set_title(f"order {order} ({order * order} coefficients)", fontsize=10)
-        ax.grid(alpha=0.3)
+        _over_spheres(ax, "RMSE against the exact union", f"order {order} ({order * order} coefficients)")
     grid[0][0].legend(fontsize=8)
     for ax in grid[0][len(orders):]:
         ax.set_visible(False)
@@ -97,28 +93,33 @@ def plot(rows, fig) -> None:
         ax.plot(x, [r["shexp_us"] for r in rs], color="#d62728", ls=ls, marker="o", ms=3,
                 label=f"shexp (hybrid), order {order}")
         ax.plot(x, [r["sum_us"] for r in rs], color="#888888", ls=ls, marker="o", ms=3, label=f"sum, order {order}")
-    ax.set_xscale("log", base=2)
-    ax.set_yscale("log")
-    ax.set_xlabel("spheres")
-    ax.set_ylabel("microseconds per receiver")
-    ax.set_title(f"(f) time per receiver ({s['timing_points']} receivers, min of {s['repeats']})", fontsize=10)
+    _over_spheres(ax, "microseconds per receiver",
+                  f"(f) time per receiver ({s['timing_points']} receivers, min of {s['repeats']})")
     ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
     ax = grid[1][2]
     for order, ls in zip(sorted({r["order"] for r in rows["timing"]}), ("-", "--")):
         rs = [r for r in rows["timing"] if r["order"] == order]
         ax.plot([r["count"] for r in rs], [r["ratio_product_shexp"] for r in rs], "k", ls=ls, marker="o",
                 label=f"order {order}")
     ax.axhline(10.0, color="#d62728", lw=1, ls=":", label="the paper's 10x")
-    ax.set_xscale("log", base=2)
-    ax.set_yscale("log")
-    ax.set_xlabel("spheres")
-    ax.set_ylabel("time of product / time of shexp")
-    ax.set_title("(g) speed-up of shexp over product (same run)", fontsize=10)
+    _over_spheres(ax, "time of product / time of shexp", "(g) speed-up of shexp over product (same run)")
     ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
     for ax in grid[1][3:]:
         ax.set_visible(False)
     fig.suptitle(f"Ren et al. 2006 sphere sets in SH against the exact union ({s['union_rays']} rays per point, "
                  f"scales {', '.join(map(str, s['scales']))}, seed {s['seed']}{', quick' if s['quick'] else ''})",
                  fontsize=12)
+
+
+
+def _over_spheres(ax, ylabel, title):
+    """A panel over the sphere count: log-log (count in powers of 2), labels, a light grid."""
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log")
+    ax.set_xlabel("spheres")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+
+
+make = deprecated_make(__name__)

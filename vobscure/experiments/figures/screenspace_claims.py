@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows, claims_measurements
 
 __all__ = ["measure", "plot"]
@@ -152,3 +153,4 @@ def _scatter_row(subfig, rows):
     subfig.legend(handles=handles, loc="outside lower center", ncol=6, fontsize=9.5, frameon=False)
 
 
+make = deprecated_make(__name__)

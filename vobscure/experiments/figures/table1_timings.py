@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import deprecated_make
 from ._common import Rows
 
 __all__ = ["measure", "plot", "PAPER_TABLE1", "PAPER_BLUR_MS",
@@ -318,3 +319,6 @@ def _bars(subfig, ours):
     ax.legend(fontsize=9, ncol=3, loc="upper left", framealpha=0.9)
     subfig.suptitle("(b) the same ratios (log); HSAO is the paper's only (Horizon Split AO on its GPU), "
                     "hbao 8x4 and gtao 3x3 this library's horizon-based passes", fontsize=10.5)
+
+
+make = deprecated_make(__name__)

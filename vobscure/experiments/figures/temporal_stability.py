@@ -18,6 +18,7 @@ table of ``docs/figures.md`` as ``temporal_stability.md``.
 
 from __future__ import annotations
 
+from . import deprecated_make
 from ._common import compare_rows, per_scene as _per_scene
 
 __all__ = ["measure", "plot", "markdown", "METHODS", "SCENES"]
@@ -67,3 +68,6 @@ def markdown(rows) -> str:
         lines.append(f"| {r['scene']} | {r['method']} {r['samples']} | {r['taps_per_pixel']} | "
                      f"{r['flicker']:.4f} | {r['flicker_raw']:.4f} | {r['screen_rmse']:.4f} |")
     return "\n".join(lines)
+
+
+make = deprecated_make(__name__)

@@ -64,6 +64,12 @@ Measurements
     for ambient only, i.e. 5.0 x ambient and 1.26 x Reeves-Blau) as ratios of evaluation
     times here; ambient only is writing a constant per point.
 
+Every function takes the keyword ``measurements``: a :class:`Measurements` of the run
+(``quick``, ``seed``) that keeps what its functions measured (points, ground truths, models,
+the timed convergence sweep), so that functions given the same one share them; without it a
+function measures what it needs and keeps nothing. :func:`all_rows` uses one for all its
+tables; :func:`vobscure.experiments.figures.make` one for all the tree figures of a run.
+
 Times are wall seconds on this machine: the ray casts use every core (Embree through
 :func:`vobscure.raytrace.parallel_map`), the models are single-threaded NumPy.
 
@@ -88,6 +94,7 @@ from ._common import (
     REFERENCES,
     SETTINGS,
     TREE_SCENES,
+    Measurements,
     setting,
 )
 from ._ground import GRASS_COLUMNS, GROUND_COLUMNS, grass_data, grass_rows, ground_data, ground_rows
@@ -115,6 +122,7 @@ from ._tradeoff import (
 )
 
 __all__ = ["CANOPY_SCENES", "TREE_SCENES", "GRASS_SCENE", "REFERENCES", "PAPER_MPS", "SETTINGS", "setting",
+           "Measurements",
            "canopy_rows", "reeves_blau_rows", "ground_rows", "grass_rows", "convergence_rows",
            "tradeoff_rows", "cost_rows", "weighting_rows", "canopy_images", "canopy_data", "ground_data",
            "grass_data", "all_rows", "CANOPY_COLUMNS", "GROUND_COLUMNS", "GRASS_COLUMNS",

@@ -3,12 +3,10 @@ predicted parameters against the sky visibility (Figs. 2, 3, 4, 8)."""
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
 from ...metrics import CALIBRATION_BINS, calibration_rmse
-from ._common import CANOPY_SCENES, REFERENCES, _scene, _scores, _sub, _truth, setting
+from ._common import CANOPY_SCENES, REFERENCES, _measurements, _scene, _scores, _sub, _truth, kept, setting
 
 #: Columns of :func:`canopy_rows` (and :func:`reeves_blau_rows`).
 CANOPY_COLUMNS = ("scene", "kind", "model", "shell", "shells", "source", "parameter", "refit", "reference",
@@ -27,15 +25,16 @@ def _shells(scene, quick, seed) -> dict:
     return shells
 
 
-@lru_cache(maxsize=None)
-def _canopy(name: str, quick: bool, seed: int) -> dict:
+@kept
+def _canopy(run, name: str) -> dict:
     """Points on a canopy scene's leaves, their ground truths, shells and every model's values
-    (cached per process: every canopy figure and the trade-off share it)."""
+    (kept in the run's :class:`Measurements` ``run``: every canopy figure and the trade-off share it)."""
     from ... import trees as T
     from ...scenes import leaf_points
 
+    quick, seed = run.quick, run.seed
     s = setting(quick)
-    scene = _scene(name)
+    scene = _scene(run, name)
     points, normals = leaf_points(scene, s["points"], seed=seed)
     fit, score = np.arange(0, len(points), 2), np.arange(1, len(points), 2)
     truth = {w: _truth(scene, points, normals, w, s["truth_rays"], seed + 1 + i)
@@ -64,7 +63,7 @@ def _canopy(name: str, quick: bool, seed: int) -> dict:
             "truth": truth, "shells": shells, "configs": configs, "truth_rays": s["truth_rays"]}
 
 
-def canopy_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES) -> list[dict]:
+def canopy_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES, measurements=None) -> list[dict]:
     """Eqs. 4-6 and Reeves-Blau against the sky visibility at points on the leaves.
 
     One row per (scene, model, shell, density source, reference); columns
@@ -77,11 +76,13 @@ def canopy_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES) -> 
     tables' layout). ``rmse_calibration``
     is :func:`vobscure.metrics.calibration_rmse` (:data:`CALIBRATION_BINS` equal-count bins of
     the model's value): the error in the *average* visibility the model predicts, Hegeman's
-    ensemble mean <V>, without the point-to-point scatter.
+    ensemble mean <V>, without the point-to-point scatter. ``measurements``: the run's
+    :class:`Measurements` (of ``quick``, ``seed``) to share, default a new one.
     """
+    run = _measurements(quick, seed, measurements)
     rows = []
     for name in scenes:
-        d = _canopy(name, bool(quick), int(seed))
+        d = _canopy(run, name)
         kind = d["scene"].metadata.get("kind", "")
         for c in d["configs"]:
             truth = _sub(d["truth"][c["reference"]], d["score"])
@@ -94,18 +95,19 @@ def canopy_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES) -> 
     return rows
 
 
-def reeves_blau_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES) -> list[dict]:
+def reeves_blau_rows(quick: bool = False, *, seed: int = 0, scenes=CANOPY_SCENES,
+                     measurements=None) -> list[dict]:
     """Reeves-Blau against Hegeman (Figs. 4, 12) on the same points: the rows of
     :func:`canopy_rows` with a fitted parameter on the bounding sphere and ellipsoid."""
-    return [r for r in canopy_rows(quick, seed=seed, scenes=scenes)
+    return [r for r in canopy_rows(quick, seed=seed, scenes=scenes, measurements=measurements)
             if r["source"] == "fitted" and r["shell"] in ("sphere", "ellipsoid")]
 
 def canopy_images(name: str, *, size=(64, 64), rays: int = 128, seed: int = 0, quick: bool = False,
-                  shells=("sphere",)):
+                  shells=("sphere",), measurements=None):
     """Per-pixel images of a canopy scene (Fig. 2): the ray-cast cosine sky visibility of the
     visible leaves (the G-buffer's normal, turned toward the camera) and Eq. 6 on each of
     ``shells`` (labels of :func:`canopy_data`'s shells) with the density fitted to the cosine
-    reference at points (:func:`canopy_rows`).
+    reference at points (:func:`canopy_rows`; ``measurements`` as there).
 
     Returns
     -------
@@ -118,12 +120,13 @@ def canopy_images(name: str, *, size=(64, 64), rays: int = 128, seed: int = 0, q
     from ...camera import Camera
     from ...gbuffer import render_gbuffer
 
-    scene = _scene(name)
+    run = _measurements(quick, seed, measurements)
+    scene = _scene(run, name)
     v = scene.view
     kw = {"fov_y": v["fov_y"]} if "fov_y" in v else {"ortho_height": v["ortho_height"]}
     cam = Camera.look_at(v["eye"], v["target"], up=v.get("up", (0, 1, 0)), size=tuple(size), **kw)
     gb = render_gbuffer(scene, cam)
-    d = _canopy(name, bool(quick), int(seed))
+    d = _canopy(run, name)
     densities = {label: next(c["parameter"] for c in d["configs"] if c["model"] == "hegeman"
                              and c["shell"] == label and c["source"] == "fitted" and c["reference"] == "cosine")
                  for label in shells}
@@ -152,9 +155,9 @@ def _on_foliage(scene, gb, valid) -> np.ndarray:
     index = list(scene.meshes).index(scene.metadata.get("foliage_mesh"))
     return np.asarray(scene.mesh_index)[np.asarray(gb.primitive)[valid]] == index
 
-def canopy_data(name: str, quick: bool = False, *, seed: int = 0) -> dict:
-    """The points behind :func:`canopy_rows` for one scene (cached per process): ``points``,
+def canopy_data(name: str, quick: bool = False, *, seed: int = 0, measurements=None) -> dict:
+    """The points behind :func:`canopy_rows` for one scene (kept in ``measurements``): ``points``,
     ``normals`` (n, 3); ``fit`` and ``score`` index arrays; ``truth`` (reference -> Estimate
     over all n points); ``shells`` (label -> (shell, count)); ``configs``: one dict per
     model configuration with ``values`` over the ``score`` points. Read only."""
-    return _canopy(str(name), bool(quick), int(seed))
+    return _canopy(_measurements(quick, seed, measurements), str(name))

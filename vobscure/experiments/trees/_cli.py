@@ -3,31 +3,26 @@ tables (:func:`main`) and the Poisson rows alone (:func:`poisson_main`)."""
 
 from __future__ import annotations
 
-from ._canopy import CANOPY_COLUMNS, canopy_rows
-from ._common import setting
-from ._ground import GRASS_COLUMNS, GROUND_COLUMNS, grass_rows, ground_rows
+from . import _canopy, _ground, _tradeoff
+from ._common import _measurements, setting
 from ._poisson import ELLIPSOID_MAP_COLUMNS, POISSON_COLUMNS, ellipsoid_map_rows, poisson_rows
-from ._tradeoff import (
-    CONVERGENCE_COLUMNS,
-    COST_COLUMNS,
-    TRADEOFF_COLUMNS,
-    WEIGHTING_COLUMNS,
-    convergence_rows,
-    cost_rows,
-    tradeoff_rows,
-    weighting_rows,
-)
 
-def all_rows(quick: bool = False, *, seed: int = 0) -> dict:
-    """Every measurement, by name (the order of :func:`main`'s tables)."""
-    return {"canopy": canopy_rows(quick, seed=seed), "ground": ground_rows(quick, seed=seed),
-            "grass": grass_rows(quick, seed=seed), "weighting": weighting_rows(quick, seed=seed),
-            "convergence": convergence_rows(quick, seed=seed), "tradeoff": tradeoff_rows(quick, seed=seed),
-            "cost": cost_rows(quick, seed=seed)}
+#: The tables of :func:`main`, in order: name -> (function of the rows, their columns).
+_TABLES = {"canopy": (_canopy.canopy_rows, _canopy.CANOPY_COLUMNS),
+           "ground": (_ground.ground_rows, _ground.GROUND_COLUMNS),
+           "grass": (_ground.grass_rows, _ground.GRASS_COLUMNS),
+           "weighting": (_tradeoff.weighting_rows, _tradeoff.WEIGHTING_COLUMNS),
+           "convergence": (_tradeoff.convergence_rows, _tradeoff.CONVERGENCE_COLUMNS),
+           "tradeoff": (_tradeoff.tradeoff_rows, _tradeoff.TRADEOFF_COLUMNS),
+           "cost": (_tradeoff.cost_rows, _tradeoff.COST_COLUMNS)}
 
-_TABLE_COLUMNS = {"canopy": CANOPY_COLUMNS, "ground": GROUND_COLUMNS, "grass": GRASS_COLUMNS,
-                  "weighting": WEIGHTING_COLUMNS, "convergence": CONVERGENCE_COLUMNS,
-                  "tradeoff": TRADEOFF_COLUMNS, "cost": COST_COLUMNS}
+
+def all_rows(quick: bool = False, *, seed: int = 0, measurements=None) -> dict:
+    """Every measurement, by name (the order of :func:`main`'s tables), all of one
+    :class:`Measurements` (``measurements``, default a new one)."""
+    run = _measurements(quick, seed, measurements)
+    return {name: rows(quick, seed=seed, measurements=run) for name, (rows, _) in _TABLES.items()}
+
 
 def main(argv=None) -> int:
     """``python -m vobscure.experiments.trees [--quick] [--seed N] [--out DIR] [--poisson]``: run
@@ -54,7 +49,7 @@ def main(argv=None) -> int:
     tables = all_rows(args.quick, seed=args.seed)
     elapsed = time.perf_counter() - t0
     for name, rows in tables.items():
-        cols = _TABLE_COLUMNS[name]
+        cols = _TABLES[name][1]
         if name == "ground":
             rows = [r for r in rows if r["distance"] is None] + [r for r in rows if r["distance"] is not None]
         print(f"\n## {name}\n")
@@ -63,10 +58,11 @@ def main(argv=None) -> int:
     if args.out:
         out = Path(args.out)
         for name, rows in tables.items():
-            write_csv(out / f"trees_{name}.csv", rows, _TABLE_COLUMNS[name], digits=6)
+            write_csv(out / f"trees_{name}.csv", rows, _TABLES[name][1], digits=6)
         write_json(out / "trees.json", {"quick": args.quick, "seed": args.seed, "seconds": elapsed,
                                         "settings": setting(args.quick), "machine": machine()})
     return 0
+
 
 def poisson_main(argv=None) -> int:
     """:func:`poisson_rows` and :func:`ellipsoid_map_rows` as Markdown tables (and

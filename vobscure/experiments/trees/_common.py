@@ -1,9 +1,10 @@
 """What every measurement of :mod:`vobscure.experiments.trees` shares: the scenes, the two
-references, the sizes of a run, the ground truth and the scores of a model against it."""
+references, the sizes of a run, the :class:`Measurements` of a run, the ground truth and the
+scores of a model against it."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+import functools
 
 import numpy as np
 
@@ -48,8 +49,77 @@ def setting(quick: bool) -> dict:
     return dict(SETTINGS[bool(quick)])
 
 
-@lru_cache(maxsize=None)
-def _scene(name: str):
+class Measurements:
+    """The measurements of one run (``quick``, ``seed``) of this package, each made the first
+    time a function asks for it and kept as long as this object lives.
+
+    Every function of :mod:`vobscure.experiments.trees` takes one as its keyword
+    ``measurements``; without it, the function makes its own, which is dropped when it returns.
+    Pass the same object to several functions (the figures of a run get one from
+    :func:`vobscure.experiments.figures.make`) and they share the points, ground truths,
+    models and timings instead of measuring them again.
+
+    Parameters
+    ----------
+    quick : bool, optional
+        The sizes of the run (:func:`setting`).
+    seed : int, optional
+        Seed of every measurement of the run.
+
+    Examples
+    --------
+    >>> m = Measurements(quick=True)
+    >>> m.get("answer", lambda: 42), m.get("answer", lambda: 0)
+    (42, 42)
+    >>> Measurements(quick=1)
+    Traceback (most recent call last):
+    ...
+    ValueError: quick must be True or False, got 1
+    """
+
+    def __init__(self, quick: bool = False, *, seed: int = 0):
+        if not isinstance(quick, (bool, np.bool_)):
+            raise ValueError(f"quick must be True or False, got {quick!r}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+        self.quick, self.seed = bool(quick), int(seed)
+        self._made = {}
+
+    def __repr__(self) -> str:
+        return f"Measurements(quick={self.quick}, seed={self.seed}; {len(self._made)} made)"
+
+    def get(self, key, make):
+        """What is kept under ``key``; ``make()`` makes and keeps it the first time."""
+        if key not in self._made:
+            self._made[key] = make()
+        return self._made[key]
+
+
+def _measurements(quick, seed, given: Measurements | None) -> Measurements:
+    """``given``, checked to be of this run (``quick``, ``seed``), or a new :class:`Measurements`."""
+    if given is None:
+        return Measurements(bool(quick), seed=int(seed))
+    if not isinstance(given, Measurements):
+        raise ValueError(f"measurements must be a Measurements, got {type(given).__name__}")
+    if (given.quick, given.seed) != (bool(quick), int(seed)):
+        raise ValueError(f"measurements are of quick={given.quick}, seed={given.seed}, not of "
+                         f"quick={bool(quick)}, seed={int(seed)}")
+    return given
+
+
+def kept(fn):
+    """``fn(run, *args)`` made once per :class:`Measurements` ``run`` and ``args``, kept in ``run``."""
+    key = f"{fn.__module__}.{fn.__qualname__}"
+
+    @functools.wraps(fn)
+    def get(run: Measurements, *args):
+        return run.get((key, *args), lambda: fn(run, *args))
+
+    return get
+
+
+@kept
+def _scene(run: Measurements, name: str):
     from ... import scenes
 
     return scenes.get(name)

@@ -3,11 +3,9 @@ the grass blades (Fig. 10, Eq. 9) against the sky visibility."""
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
-from ._common import GRASS_SCENE, REFERENCES, TREE_SCENES, _scene, _scores, _sub, _truth, setting
+from ._common import GRASS_SCENE, REFERENCES, TREE_SCENES, _measurements, _scene, _scores, _sub, _truth, kept, setting
 
 #: Columns of :func:`ground_rows`.
 GROUND_COLUMNS = ("scene", "model", "reference", "distance", "distance_r", "sphere_radius", "rmse",
@@ -18,12 +16,13 @@ GRASS_COLUMNS = ("scene", "model", "reference", "height_lo", "height_hi", "cos_l
                  "bias", "corr", "model_mean", "truth_mean", "truth_stderr", "points", "truth_rays")
 
 
-@lru_cache(maxsize=None)
-def _ground(name: str, quick: bool, seed: int) -> dict:
+@kept
+def _ground(run, name: str) -> dict:
     from ... import trees as T
 
-    s = setting(quick)
-    scene = _scene(name)
+    seed = run.seed
+    s = setting(run.quick)
+    scene = _scene(run, name)
     md = scene.metadata
     sphere = T.bounding_sphere(np.asarray(md["canopy_points"], dtype=np.float64))
     R = float(sphere.radius)
@@ -55,16 +54,18 @@ def _ground(name: str, quick: bool, seed: int) -> dict:
             "truth": truth, "values": values, "sphere": sphere, "sigma": sigma,
             "truth_rays": s["truth_rays"]}
 
-def ground_rows(quick: bool = False, *, seed: int = 0, scenes=TREE_SCENES) -> list[dict]:
+def ground_rows(quick: bool = False, *, seed: int = 0, scenes=TREE_SCENES, measurements=None) -> list[dict]:
     """Fig. 9: the occluder models on the ground around a tree against the sky visibility.
 
     One row per (scene, model, reference, ring distance) and one per (scene, model,
     reference) over all rings (``distance`` empty); columns :data:`GROUND_COLUMNS`.
-    ``distance_r`` is the distance from the trunk in bounding-sphere radii.
+    ``distance_r`` is the distance from the trunk in bounding-sphere radii. ``measurements``:
+    the run's :class:`Measurements` to share, default a new one.
     """
+    run = _measurements(quick, seed, measurements)
     rows = []
     for name in scenes:
-        d = _ground(name, bool(quick), int(seed))
+        d = _ground(run, name)
         for (mdl, w), v in d["values"].items():
             truth = d["truth"][w]
             for rho in [*np.unique(d["distance"]), None]:
@@ -77,18 +78,19 @@ def ground_rows(quick: bool = False, *, seed: int = 0, scenes=TREE_SCENES) -> li
                              "sphere_radius": d["radius"], **sc, "truth_rays": d["truth_rays"]})
     return rows
 
-def ground_data(name: str, quick: bool = False, *, seed: int = 0) -> dict:
-    """The ground points behind :func:`ground_rows` (cached per process): ``points``,
+def ground_data(name: str, quick: bool = False, *, seed: int = 0, measurements=None) -> dict:
+    """The ground points behind :func:`ground_rows` (kept in ``measurements``): ``points``,
     ``distance`` (n,), ``radius`` (the bounding sphere's), ``truth`` (reference -> Estimate),
     ``values`` ((model, reference) -> (n,)), ``sigma`` of the porous model. Read only."""
-    return _ground(str(name), bool(quick), int(seed))
+    return _ground(_measurements(quick, seed, measurements), str(name))
 
-@lru_cache(maxsize=None)
-def _grass(quick: bool, seed: int) -> dict:
+@kept
+def _grass(run) -> dict:
     from ... import trees as T
 
-    s = setting(quick)
-    scene = _scene(GRASS_SCENE)
+    seed = run.seed
+    s = setting(run.quick)
+    scene = _scene(run, GRASS_SCENE)
     md = scene.metadata
     index = list(scene.meshes).index(md["foliage_mesh"])
     tri = scene.triangles[np.asarray(scene.mesh_index) == index]     # base-, base+, tip per blade
@@ -113,16 +115,17 @@ def _grass(quick: bool, seed: int) -> dict:
     return {"scene": scene, "points": points, "normals": normals, "height": P_z / h, "cos": cos_theta,
             "blade_height": h, "truth": truth, "model": model, "truth_rays": s["truth_rays"]}
 
-def grass_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
+def grass_rows(quick: bool = False, *, seed: int = 0, measurements=None) -> list[dict]:
     """Fig. 10: Eq. 9 against the sky visibility at points on grass blades.
 
     Rows per (reference, relative-height bin) over all orientations, per (reference,
     height bin, orientation bin), and one per reference over every point (``height_lo`` 0,
     ``height_hi`` 1, ``cos_lo`` / ``cos_hi`` the observed range); columns
     :data:`GRASS_COLUMNS`. ``cos`` is cos theta of Eq. 9, the normal's vertical component.
+    ``measurements``: the run's :class:`Measurements` to share, default a new one.
     """
     s = setting(quick)
-    d = _grass(bool(quick), int(seed))
+    d = _grass(_measurements(quick, seed, measurements))
     hb = np.linspace(0.0, 1.0, s["height_bins"] + 1)
     cos = d["cos"]
     cb = np.quantile(cos, np.linspace(0, 1, s["cos_bins"] + 1))
@@ -145,8 +148,8 @@ def grass_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
                 add(np.flatnonzero(inh & inc), float(hb[i]), float(hb[i + 1]), float(cb[j]), float(cb[j + 1]))
     return rows
 
-def grass_data(quick: bool = False, *, seed: int = 0) -> dict:
-    """The blade points behind :func:`grass_rows` (cached per process): ``points``,
+def grass_data(quick: bool = False, *, seed: int = 0, measurements=None) -> dict:
+    """The blade points behind :func:`grass_rows` (kept in ``measurements``): ``points``,
     ``height`` (P_z / h), ``cos`` (cos theta), ``blade_height``, ``truth`` (reference ->
     Estimate), ``model`` (Eq. 9). Read only."""
-    return _grass(bool(quick), int(seed))
+    return _grass(_measurements(quick, seed, measurements))

@@ -4,12 +4,10 @@ and the ellipsoid's affine map against the true ellipsoid."""
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
 from ._canopy import _canopy
-from ._common import CANOPY_SCENES, REFERENCES, _scene, _scores, _sub, _truth, setting
+from ._common import CANOPY_SCENES, REFERENCES, _measurements, _scene, _scores, _sub, _truth, kept, setting
 
 #: Columns of :func:`poisson_rows`.
 POISSON_COLUMNS = ("scene", "kind", "points_on", "model", "shell", "parameter", "reference", "rmse", "bias",
@@ -35,15 +33,16 @@ ELLIPSOID_MAP_COLUMNS = ("scene", "reference", "radii", "sigma", "rmse_map", "ma
 ELLIPSOID_MAP = {False: {"points": 256, "nodes": 64}, True: {"points": 12, "nodes": 24}}
 
 
-@lru_cache(maxsize=None)
-def _uniform_twin(name: str, seed: int):
+@kept
+def _uniform_twin(run, name: str):
     """A uniform leaf cloud with the tree's leaf count and leaf size in the tree's bounding
     sphere (the sphere rows) or, as ``(sphere twin, ellipsoid twin)``, in its crown ellipsoid
     (``canopy_radii``, axis-aligned, the ellipsoid rows)."""
     from ... import scenes
     from ... import trees as T
 
-    tree = _scene(UNIFORM_TWINS[name])
+    seed = run.seed
+    tree = _scene(run, UNIFORM_TWINS[name])
     md = tree.metadata
     n, size = int(md["n_leaves"]), float(md["parameters"]["leaf_size"])
     R = float(T.bounding_sphere(np.asarray(md["canopy_points"], dtype=np.float64)).radius)
@@ -52,22 +51,23 @@ def _uniform_twin(name: str, seed: int):
                                   seed=seed + 200, name=f"{name} (ellipsoid)")
     return sphere, ellipsoid
 
-@lru_cache(maxsize=None)
-def _poisson_leaves(name: str, shell_label: str, quick: bool, seed: int) -> dict:
+@kept
+def _poisson_leaves(run, name: str, shell_label: str) -> dict:
     """Leaf points, their truth and both models for one scene and shell (scored half)."""
     from ... import trees as T
     from ...scenes import leaf_points
 
-    s = setting(quick)
+    seed = run.seed
+    s = setting(run.quick)
     if name in CANOPY_SCENES:
-        d = _canopy(name, quick, seed)
+        d = _canopy(run, name)
         scene, points, normals, fit, score, truth = (d["scene"], d["points"], d["normals"], d["fit"], d["score"],
                                                      d["truth"])
         shell = d["shells"][shell_label][0]
         fitted = {c["reference"]: (c["parameter"], c["values"]) for c in d["configs"]
                   if c["model"] == "hegeman" and c["shell"] == shell_label and c["source"] == "fitted"}
     else:
-        scene = _uniform_twin(name, seed)[0 if shell_label == "sphere" else 1]
+        scene = _uniform_twin(run, name)[0 if shell_label == "sphere" else 1]
         points, normals = leaf_points(scene, s["points"], seed=seed)
         fit, score = np.arange(0, len(points), 2), np.arange(1, len(points), 2)
         truth = {w: _truth(scene, points, normals, w, s["truth_rays"], seed + 1 + i)
@@ -86,15 +86,16 @@ def _poisson_leaves(name: str, shell_label: str, quick: bool, seed: int) -> dict
             "points": points[score], "normals": normals[score],
             "truth": {w: _sub(truth[w], score) for w in REFERENCES}, "truth_rays": s["truth_rays"]}
 
-@lru_cache(maxsize=None)
-def _poisson_pixels(name: str, shell_label: str, quick: bool, seed: int) -> dict:
+@kept
+def _poisson_pixels(run, name: str, shell_label: str) -> dict:
     """Per-pixel truth (both weightings) and both models on one scene's view."""
     from ... import trees as T
     from ...camera import Camera
     from ...gbuffer import render_gbuffer
 
-    px = POISSON_PIXELS[bool(quick)]
-    leaves = _poisson_leaves(name, shell_label, quick, seed)
+    seed = run.seed
+    px = POISSON_PIXELS[run.quick]
+    leaves = _poisson_leaves(run, name, shell_label)
     scene, shell, sigma = leaves["scene"], leaves["shell"], leaves["sigma"]
     v = scene.view
     kw = {"fov_y": v["fov_y"]} if "fov_y" in v else {"ortho_height": v["ortho_height"]}
@@ -131,7 +132,7 @@ def _poisson_pixels(name: str, shell_label: str, quick: bool, seed: int) -> dict
     return {"foliage": foliage, "ground": ground, "truth": truth, "hegeman": hegeman, "poisson": poisson,
             "image": image, "rays": px["rays"], "size": (H, W)}
 
-def poisson_rows(quick: bool = False, *, seed: int = 0, scenes=POISSON_SCENES) -> list[dict]:
+def poisson_rows(quick: bool = False, *, seed: int = 0, scenes=POISSON_SCENES, measurements=None) -> list[dict]:
     """The Poisson leaf cloud's expected visibility, predicted, beside Eq. 6 with the fitted
     density, against the ray-cast sky visibility.
 
@@ -146,14 +147,16 @@ def poisson_rows(quick: bool = False, *, seed: int = 0, scenes=POISSON_SCENES) -
     The scenes ``tree_uniform`` and ``tree_poplar_uniform`` (:data:`UNIFORM_TWINS`) are
     uniform leaf clouds with each tree's leaf count and leaf size, in its bounding sphere (the
     sphere rows) or its crown ellipsoid (the ellipsoid rows): the Poisson model's error there
-    is its own, the difference on the tree is the clustering's.
+    is its own, the difference on the tree is the clustering's. ``measurements``: the run's
+    :class:`Measurements` to share, default a new one.
     """
+    run = _measurements(quick, seed, measurements)
     rows = []
     for name in scenes:
         for label in POISSON_SHELLS:
-            lv = _poisson_leaves(name, label, bool(quick), int(seed))
+            lv = _poisson_leaves(run, name, label)
             kind = lv["scene"].metadata.get("kind", "")
-            pix = _poisson_pixels(name, label, bool(quick), int(seed))
+            pix = _poisson_pixels(run, name, label)
             for w in REFERENCES:
                 rho, hv = lv["fitted"][w]
                 groups = [("leaves", hv, lv["poisson"][w], lv["truth"][w], lv["truth_rays"])]
@@ -172,7 +175,8 @@ def poisson_rows(quick: bool = False, *, seed: int = 0, scenes=POISSON_SCENES) -
     return rows
 
 def ellipsoid_map_rows(quick: bool = False, *, seed: int = 0,
-                       scenes=("tree", "tree_poplar", "tree_uniform", "tree_poplar_uniform")) -> list[dict]:
+                       scenes=("tree", "tree_poplar", "tree_uniform", "tree_poplar_uniform"),
+                       measurements=None) -> list[dict]:
     """The affine map of an ellipsoid (Hegeman 2006, Sec. 3), as :func:`vobscure.trees.poisson_visibility`
     uses it, against the Poisson leaf cloud's expected visibility in the true ellipsoid
     (:func:`vobscure.trees.poisson_quadrature`, brute-force quadrature over the hemisphere).
@@ -181,16 +185,17 @@ def ellipsoid_map_rows(quick: bool = False, *, seed: int = 0,
     ``rmse_map``, ``max_map`` and ``bias_map`` of the mapped model against the true
     ellipsoid's; ``rmse_truth_map`` and ``rmse_truth_exact`` of each against the ray-cast sky
     visibility (how much of the model's error the map is). Columns
-    :data:`ELLIPSOID_MAP_COLUMNS`.
+    :data:`ELLIPSOID_MAP_COLUMNS`; ``measurements`` as in :func:`poisson_rows`.
     """
     from ... import trees as T
 
+    run = _measurements(quick, seed, measurements)
     cfg = ELLIPSOID_MAP[bool(quick)]
     rows = []
     for name in scenes:
-        lv = _poisson_leaves(name, "ellipsoid", bool(quick), int(seed))
+        lv = _poisson_leaves(run, name, "ellipsoid")
         if name in CANOPY_SCENES:
-            d = _canopy(name, bool(quick), int(seed))
+            d = _canopy(run, name)
             P, N = d["points"][d["score"]], d["normals"][d["score"]]
         else:
             P, N = lv["points"], lv["normals"]
@@ -212,13 +217,14 @@ def ellipsoid_map_rows(quick: bool = False, *, seed: int = 0,
     return rows
 
 def poisson_images(name: str, *, shell: str = "sphere", reference: str = "cosine", quick: bool = False,
-                   seed: int = 0) -> dict:
+                   seed: int = 0, measurements=None) -> dict:
     """The per-pixel images behind :func:`poisson_rows` (the figure ``canopy_models``):
     ``truth``, ``stderr``, ``hegeman`` (Eq. 6 fitted; Eqs. 7-8 on the ground), ``poisson``
     (predicted), each (H, W) with NaN where no foliage or ground is seen, and the parameters
-    ``density`` and ``sigma``."""
-    lv = _poisson_leaves(str(name), shell, bool(quick), int(seed))
-    pix = _poisson_pixels(str(name), shell, bool(quick), int(seed))
+    ``density`` and ``sigma``; ``measurements`` as in :func:`poisson_rows`."""
+    run = _measurements(quick, seed, measurements)
+    lv = _poisson_leaves(run, str(name), shell)
+    pix = _poisson_pixels(run, str(name), shell)
     img = pix["image"]
     t = pix["truth"][reference]
     return {"truth": img(np.asarray(t.value)), "stderr": img(np.asarray(t.stderr)),

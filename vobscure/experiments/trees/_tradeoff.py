@@ -4,13 +4,22 @@ time, the paper's cost claim, and which hemisphere integral each model fits bett
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 
 import numpy as np
 
 from ...metrics import equal_error_rays
 from ._canopy import _canopy, canopy_rows
-from ._common import CANOPY_SCENES, GRASS_SCENE, PAPER_MPS, REFERENCES, TREE_SCENES, _sub, setting
+from ._common import (
+    CANOPY_SCENES,
+    GRASS_SCENE,
+    PAPER_MPS,
+    REFERENCES,
+    TREE_SCENES,
+    _measurements,
+    _sub,
+    kept,
+    setting,
+)
 from ._ground import _grass, _ground, grass_rows, ground_rows
 
 #: Columns of :func:`convergence_rows`.
@@ -32,14 +41,14 @@ WEIGHTING_COLUMNS = ("scene", "what", "model", "rmse_cosine", "rmse_uniform", "b
                      "stderr_cosine", "stderr_uniform")
 
 
-def _targets(quick: bool, seed: int) -> list[dict]:
+def _targets(run) -> list[dict]:
     """What the trade-off measures: per (scene, points), the points, truth and the models
     (label -> (values per reference, callable for timing on any points))."""
     from ... import trees as T
 
     out = []
     for name in CANOPY_SCENES:
-        d = _canopy(name, quick, seed)
+        d = _canopy(run, name)
         sp = d["score"]
         best = _best_multi(d, "cosine")      # one multi-shell for both references
         models = {}
@@ -66,7 +75,7 @@ def _targets(quick: bool, seed: int) -> list[dict]:
                     "normals": d["normals"][sp], "truth": {w: _sub(d["truth"][w], sp) for w in REFERENCES},
                     "models": models})
     for name in TREE_SCENES:
-        g = _ground(name, quick, seed)
+        g = _ground(run, name)
         models = {}
         for (mdl, w), v in g["values"].items():
             label = f"occluder {mdl}"
@@ -78,7 +87,7 @@ def _targets(quick: bool, seed: int) -> list[dict]:
             models[label]["fn"][w] = fn
         out.append({"scene": name, "points_on": "ground", "scene_obj": g["scene"], "points": g["points"],
                     "normals": g["normals"], "truth": g["truth"], "models": models})
-    gr = _grass(quick, seed)
+    gr = _grass(run)
     h = gr["blade_height"]
     P_z = gr["points"][:, 1] - gr["scene"].metadata["ground_y"]
 
@@ -106,8 +115,8 @@ def _best_multi(d, reference) -> str:
                 best, label = e, c["shell"]
     return label
 
-@lru_cache(maxsize=None)
-def _convergence(quick: bool, seed: int) -> dict:
+@kept
+def _convergence(run) -> dict:
     """Ray-cast estimates at each ray count of the sweep, per (scene, points_on, reference),
     and their timings, measured in one run (round-robin with the models' timings).
 
@@ -119,8 +128,9 @@ def _convergence(quick: bool, seed: int) -> dict:
     from ...groundtruth import ambient_occlusion
     from ..common import time_calls
 
-    s = setting(quick)
-    targets = _targets(quick, seed)
+    seed = run.seed
+    s = setting(run.quick)
+    targets = _targets(run)
     funcs = {}
 
     def tiled(a, count):
@@ -144,15 +154,17 @@ def _convergence(quick: bool, seed: int) -> dict:
             values[key] = Estimate(value=e.value[:n], stderr=e.stderr[:n], samples=e.samples)
     return {"targets": targets, "timings": timings, "values": values}
 
-def convergence_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
+def convergence_rows(quick: bool = False, *, seed: int = 0, measurements=None) -> list[dict]:
     """The ray cast's RMSE against the reference at each ray count of the sweep.
 
     Columns :data:`CONVERGENCE_COLUMNS`. ``rmse_corrected`` removes the reference's own noise,
     sqrt(RMSE^2 - mean stderr^2) (the two are independent); ``rmse_sqrt_rays`` is
     ``rmse_corrected * sqrt(rays)``, constant if the error falls as 1 / sqrt(rays).
+    ``measurements``: the run's :class:`Measurements` to share (with :func:`tradeoff_rows`,
+    the same timed run), default a new one.
     """
     s = setting(quick)
-    c = _convergence(bool(quick), int(seed))
+    c = _convergence(_measurements(quick, seed, measurements))
     rows = []
     for ti, t in enumerate(c["targets"]):
         for w in REFERENCES:
@@ -177,7 +189,7 @@ def _time_at(r_eq, rays, times) -> float:
         return float(times[0] * r_eq / rays[0])
     return float(np.exp(np.interp(np.log(r_eq), np.log(rays), np.log(times))))
 
-def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
+def tradeoff_rows(quick: bool = False, *, seed: int = 0, measurements=None) -> list[dict]:
     """Speed against accuracy: each model's equal-error ray count and its time relative to that
     ray cast.
 
@@ -192,10 +204,12 @@ def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
     ``equal_rays`` (log-log interpolation of the measured times), ``time_ratio`` their ratio
     and ``speedup`` its inverse (wall time: the ray cast runs on every core, the model on
     one); ``speedup_cpu`` the same with process CPU time summed over threads.
+    ``measurements`` as in :func:`convergence_rows`.
     """
     s = setting(quick)
-    c = _convergence(bool(quick), int(seed))
-    conv = convergence_rows(quick, seed=seed)
+    run = _measurements(quick, seed, measurements)
+    c = _convergence(run)
+    conv = convergence_rows(quick, seed=seed, measurements=run)
     rays = np.asarray(s["rays"], dtype=np.float64)
     rows = []
     for ti, t in enumerate(c["targets"]):
@@ -234,22 +248,24 @@ def tradeoff_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
                              "timing_points": s["timing_points"], "raycast_timing_points": n_rc})
     return rows
 
-def cost_rows(quick: bool = False, *, seed: int = 0, scenes=("tree",)) -> list[dict]:
+def cost_rows(quick: bool = False, *, seed: int = 0, scenes=("tree",), measurements=None) -> list[dict]:
     """The paper's cost claim as ratios of evaluation time per point, timed in one run.
 
     Shaders: ``"ambient"`` (a constant written per point), ``"reeves_blau"`` and
     ``"hegeman"`` on the bounding sphere (the paper's single shell), and Eq. 6 on the
     ellipsoid and on the best multi-sphere shell (extras the paper did not time). Columns
     :data:`COST_COLUMNS`; ``paper_vs_*`` are the paper's ratios of throughput (2300 / 460 = 5.0
-    and 580 / 460 = 1.26).
+    and 580 / 460 = 1.26). ``measurements``: the run's :class:`Measurements` to share,
+    default a new one.
     """
     from ... import trees as T
     from ..common import time_calls
 
     s = setting(quick)
+    run = _measurements(quick, seed, measurements)
     rows = []
     for name in scenes:
-        d = _canopy(name, bool(quick), int(seed))
+        d = _canopy(run, name)
 
         def param(model, shell):
             return next(c["parameter"] for c in d["configs"] if c["model"] == model and c["shell"] == shell
@@ -281,13 +297,15 @@ def cost_rows(quick: bool = False, *, seed: int = 0, scenes=("tree",)) -> list[d
                          "timing_points": n, "repeats": max(3, s["repeats"])})
     return rows
 
-def weighting_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
+def weighting_rows(quick: bool = False, *, seed: int = 0, measurements=None) -> list[dict]:
     """Which hemisphere integral each model fits better: its RMSE against the cosine-weighted
     and the uniform sky visibility, side by side (columns :data:`WEIGHTING_COLUMNS`).
 
     Canopy models with a fitted parameter are fitted to each reference separately; the
     predicted density, the occluder models and Eq. 9 have no fitted parameter.
+    ``measurements``: the run's :class:`Measurements` to share, default a new one.
     """
+    run = _measurements(quick, seed, measurements)
     rows = []
 
     def pair(scene, what, model, rs):
@@ -299,7 +317,7 @@ def weighting_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
                      "rmse_uniform": u["rmse"], "better": "cosine" if c["rmse"] < u["rmse"] else "uniform",
                      "stderr_cosine": c["truth_stderr"], "stderr_uniform": u["truth_stderr"]})
 
-    canopy = canopy_rows(quick, seed=seed)
+    canopy = canopy_rows(quick, seed=seed, measurements=run)
     keys = []
     for r in canopy:
         k = (r["scene"], r["model"], r["shell"], r["source"])
@@ -309,10 +327,11 @@ def weighting_rows(quick: bool = False, *, seed: int = 0) -> list[dict]:
         rs = [r for r in canopy if (r["scene"], r["model"], r["shell"], r["source"]) == (scene, model, shell, source)]
         name = "Eq. 6" if model == "hegeman" else "Reeves-Blau"
         pair(scene, "leaves", f"{name}, {shell}, {source}", rs)
-    ground = [r for r in ground_rows(quick, seed=seed) if r["distance"] is None]
+    ground = [r for r in ground_rows(quick, seed=seed, measurements=run) if r["distance"] is None]
     for scene in TREE_SCENES:
         for mdl in ("hegeman", "exact", "porous"):
             pair(scene, "ground", f"occluder {mdl}", [r for r in ground if r["scene"] == scene and r["model"] == mdl])
-    grass = [r for r in grass_rows(quick, seed=seed) if r["height_lo"] == 0.0 and r["height_hi"] == 1.0]
+    grass = [r for r in grass_rows(quick, seed=seed, measurements=run)
+             if r["height_lo"] == 0.0 and r["height_hi"] == 1.0]
     pair(GRASS_SCENE, "blades", "Eq. 9", grass)
     return rows
