@@ -263,7 +263,7 @@ def test_main_quick_prints_every_table(capsys, tmp_path, rows):
     assert (tmp_path / "trees.json").is_file()
 
 
-# ----------------------------------------------------------------------------- Poisson (issue 15)
+# ----------------------------------------------------------------------------- Poisson
 @pytest.fixture(scope="module")
 def poisson_rows(run):
     return X.poisson_rows(True, seed=SEED, measurements=run)

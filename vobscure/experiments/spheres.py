@@ -1,4 +1,4 @@
-"""Measurements of Ren et al. (2006)'s sphere sets in spherical harmonics (issue 15).
+"""Measurements of Ren et al. (2006)'s sphere sets in spherical harmonics.
 
 Three tables, each a list of dict rows (the figures ``ren_spheres`` and ``proxy_bunny`` plot
 them, ``docs/sphere-sets.md`` quotes them):

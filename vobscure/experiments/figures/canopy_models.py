@@ -1,5 +1,5 @@
 """Canopy models: Hegeman's Eq. 6 with a fitted density against the Poisson leaf cloud's
-expected visibility with nothing fitted (issue 15).
+expected visibility with nothing fitted.
 
 One PNG, ``canopy_models.png``, and the numbers behind it, ``canopy_models.csv`` (the rows of
 :func:`vobscure.experiments.trees.poisson_rows`).
