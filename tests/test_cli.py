@@ -115,3 +115,19 @@ def test_figures_command_runs_one_figure_quick(capsys, tmp_path):
     assert main(["figures", "conventions", "--quick", "--out", str(tmp_path)]) == 0
     assert (tmp_path / "conventions.png").is_file()
     assert "conventions.png" in capsys.readouterr().out
+
+
+def test_camera_takes_negative_coordinates_as_written(tmp_path):
+    """``--camera -1.5,2,...`` (a value starting with a minus sign) is the camera's value, not
+    an unknown option; the run's provenance records that eye."""
+    status = cli.main(["compare", "--camera", "-1.5,2,1.5,0,0,0,40", "--scene", "slab", "--size", "16", "12",
+                       "--methods", "line:5", "--reference", "screen", "--quick", "--quiet",
+                       "--out", str(tmp_path / "out"), "--cache", str(tmp_path / "cache")])
+    assert status == 0
+    prov = json.loads((tmp_path / "out" / "provenance.json").read_text())
+    assert prov["camera"]["eye"] == [-1.5, 2.0, 1.5] and prov["camera"]["fov_y"] == 40.0
+
+
+def test_camera_with_a_negative_first_number_and_too_few_values_is_a_clean_error(tmp_path, capsys):
+    assert cli.main(["compare", "--camera", "-1,2,3", "--out", str(tmp_path)]) == 2
+    assert "6 or 7 numbers" in capsys.readouterr().err

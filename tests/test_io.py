@@ -150,6 +150,11 @@ def test_configured_channels_and_layer_name(tmp_path):
     assert depth[0, 0] == 2 and normal[0, 0].tolist() == [1, 0, -1]
     _, normal, _ = vio.read_buffers(tmp_path / "f.exr", normal_channels=("geo.Nrm.B", "geo.Nrm.G", "geo.Nrm.R"))
     assert normal[0, 0].tolist() == [-1, 0, 1]
+    # one string of three comma-separated names, as the command line takes it
+    _, normal, _ = vio.read_buffers(tmp_path / "f.exr", normal_channels="geo.Nrm.B, geo.Nrm.G,geo.Nrm.R")
+    assert normal[0, 0].tolist() == [-1, 0, 1]
+    with pytest.raises(ValueError, match="normal_channels"):
+        vio.read_buffers(tmp_path / "f.exr", normal_channels="geo.Nrm.B,geo.Nrm.G")
 
 
 def test_normals_from_a_second_file(tmp_path):

@@ -324,8 +324,6 @@ def _frame_reader(args):
         raise ValueError("a frame needs its camera: give --fov, --intrinsics or --projection")
     pose = _matrix_arg(args.pose, "pose") if args.pose is not None else None
     channels = args.normal_channels
-    if channels is not None and "," in channels:
-        channels = tuple(c.strip() for c in channels.split(","))
     convert = {k: v for k, v in (("near", args.near), ("far", args.far), ("normal_space", args.normal_space),
                                  ("normal_encoding", args.normal_encoding), ("convention", args.convention),
                                  ("background", args.background)) if v is not None}
@@ -534,10 +532,33 @@ def _visibility_image(vis, valid):
     return img
 
 
+#: Options whose one value is a comma-separated list, which may start with a minus sign
+#: (``--camera -14,2,0,0,1,0``): argparse would take such a value for an option, so it is
+#: passed on as ``--camera=-14,2,0,0,1,0``.
+LIST_OPTIONS = ("--camera",)
+
+
+def _joined_list_values(argv: list[str]) -> list[str]:
+    """``argv`` with each :data:`LIST_OPTIONS` option and a following value that starts with
+    ``-`` and holds a comma joined as ``OPTION=VALUE``."""
+    out = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a in LIST_OPTIONS and i + 1 < len(argv) and argv[i + 1].startswith("-") and "," in argv[i + 1]:
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def main(argv=None) -> int:
     """Entry point of the ``vobscure`` command; returns the exit status."""
     parser = _parser()
-    args = parser.parse_args(argv)
+    argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
+    args = parser.parse_args(_joined_list_values(argv))
     if args.command is None:
         parser.print_help()
         return 0

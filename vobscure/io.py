@@ -84,8 +84,9 @@ def read_gbuffer(path_or_paths, *, camera, normal_path=None, depth_channel=None,
         EXR channel (or NPZ array) of the depth; default: the first of
         :data:`DEPTH_CHANNELS` present (NPZ: ``depth``).
     normal_channels : str or (str, str, str), optional
-        EXR channels of the normals: three names, or a layer name such as
-        ``"View Layer.Normal"`` (its ``.X .Y .Z`` or ``.R .G .B``); NPZ: the array name.
+        EXR channels of the normals: three names (a tuple, or one string ``"X,Y,Z"`` as on
+        the command line), or a layer name such as ``"View Layer.Normal"`` (its ``.X .Y .Z``
+        or ``.R .G .B``); NPZ: the array name.
         Default: the first of :data:`NORMAL_CHANNELS` present, and no normals (None is passed
         on) when the file has none.
     depth_kind : str, optional
@@ -313,6 +314,8 @@ def _normal_names(channels, spec):
         layers = {n[: -len(".X")] for n in channels if n.endswith(".Normal.X")}
         layers = [lay for lay in layers if all(f"{lay}.{a}" in channels for a in "YZ")]
         return tuple(f"{layers[0]}.{a}" for a in "XYZ") if len(layers) == 1 else None
+    if isinstance(spec, str) and "," in spec:
+        spec = tuple(c.strip() for c in spec.split(","))          # "X,Y,Z", as on the command line
     if isinstance(spec, str):
         for axes in ("XYZ", "RGB", "xyz", "rgb"):
             names = tuple(f"{spec}.{a}" for a in axes)
