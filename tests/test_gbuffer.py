@@ -92,7 +92,9 @@ def test_names_of_vobscure_gbuffer():
     import vobscure.gbuffer
     import vobscure.render
 
-    assert vobscure.gbuffer.render_gbuffer is vobscure.render.render_gbuffer is vo.render_gbuffer
+    assert vobscure.render.render_gbuffer is vo.render_gbuffer
+    with pytest.warns(DeprecationWarning, match="vobscure.render_gbuffer"):
+        assert vobscure.gbuffer.render_gbuffer is vo.render_gbuffer
     for name in ("DEPTH_KINDS", "NORMAL_SPACES", "NORMAL_ENCODINGS", "CONVENTIONS", "NORMAL_LENGTH_TOL",
                  "NORMAL_ZERO_TOL", "VIEW_TOL", "CENTRAL_RATIO", "NORMAL_BAND_ROWS",
                  "NormalsRenormalizedWarning", "NormalsRepairedWarning"):

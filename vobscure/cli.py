@@ -462,7 +462,7 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     from . import __version__
     from ._io import save_npz
     from .experiments.common import default_radius
-    from .gbuffer import render_gbuffer
+    from .render import render_gbuffer
     from .groundtruth import ground_truth
     from .scenes import resolve
 

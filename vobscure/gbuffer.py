@@ -12,12 +12,13 @@ A G-buffer comes from :func:`~vobscure.render.render_gbuffer` (Embree primary ra
 Direct3D, reversed-Z, ray distance, packed normals, world-space normals) into the library's
 (``docs/own-buffers.md``; the conversions are in :mod:`vobscure.convert`). The names of
 :mod:`vobscure.convert` that ``from_arrays`` documents (its constants and warnings) can be
-imported from here too, and so can ``render_gbuffer``.
+imported from here too (``render_gbuffer`` too, deprecated: it is :func:`vobscure.render_gbuffer`).
 """
 
 from __future__ import annotations
 
 import importlib
+import warnings
 from functools import cached_property
 
 import numpy as np
@@ -408,8 +409,10 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 def __getattr__(name):
-    # render_gbuffer lives in vobscure.render, which imports this module for GBuffer; it is
-    # looked up there by name on first use, so that this module does not import the renderer.
+    # render_gbuffer lives in vobscure.render, which imports this module for GBuffer; the old
+    # name is looked up there on first use (this module does not import the renderer).
     if name == "render_gbuffer":
+        warnings.warn("vobscure.gbuffer.render_gbuffer is deprecated; use vobscure.render_gbuffer "
+                      "(vobscure.render)", DeprecationWarning, stacklevel=2)
         return importlib.import_module(".render", __package__).render_gbuffer
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

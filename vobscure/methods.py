@@ -78,7 +78,11 @@ def filter_options(function, options: dict) -> dict:
     >>> filter_options(f, dict(radius=0.5, normal_clamp=True, seed=1))
     {'radius': 0.5, 'seed': 1}
     """
-    accepted = _parameters(function)
+    return _taken(_parameters(function), options)
+
+
+def _taken(accepted: frozenset | None, options: dict) -> dict:
+    """The ``options`` named in ``accepted`` (all of them when ``accepted`` is None)."""
     return dict(options) if accepted is None else {k: v for k, v in options.items() if k in accepted}
 
 
@@ -181,7 +185,7 @@ class Method:
         if unknown:
             raise ValueError(f"no registered method takes the option(s) {', '.join(map(repr, unknown))}; "
                              f"method {self.name!r} takes {', '.join(sorted(self._parameters or ()))}")
-        kwargs = options if self._parameters is None else {k: v for k, v in options.items() if k in self._parameters}
+        kwargs = _taken(self._parameters, options)
         if self.samples is not None:
             kwargs[self.samples] = self.default_samples if samples is None else samples
         if fetch is not None:

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..gbuffer import render_gbuffer
+from ..render import render_gbuffer
 from ..groundtruth import ambient_occlusion, ground_truth
 from ..objectspace import TERMS, bunnell, bunnell_gbuffer, vertex_disks
 from ..scenes import get as get_scene

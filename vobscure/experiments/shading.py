@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..groundtruth import ambient_occlusion, ground_truth
-from ..gbuffer import render_gbuffer
+from ..render import render_gbuffer
 from ..scenes import get as get_scene
 from ..screenspace import gtao, gtao_bent_normals
 from ..shading import LinearSky, bent_normal_lookup, multibounce_jimenez, stewart_langer

@@ -393,7 +393,7 @@ def _stamp(spec):
 def view(config: SweepConfig):
     """(scene, camera, G-buffer) of a configuration, made once per worker process and kept
     while the sweep runs."""
-    from ..gbuffer import render_gbuffer
+    from ..render import render_gbuffer
     from ..scenes import resolve
 
     stamp = _stamp(config.scene)

@@ -86,22 +86,25 @@ def _paths(name: str, out_dir) -> dict:
     return {ext: out_dir / f"{name}.{ext}" for ext in ("png", "csv", "npz", "md")}
 
 
+def _needs(name: str, package: str) -> list[str]:
+    """The shared measurements (keys of :data:`_SHARED`) the figure's ``measure`` takes."""
+    params = inspect.signature(module(name, package).measure).parameters
+    return [key for key in _SHARED if key in params]
+
+
 def measure(name: str, profile: Profile, *, package: str = __name__, shared=None) -> Rows:
     """``measure`` of the figure ``name`` at ``profile``, as :class:`Rows`.
 
     ``shared`` (a dict) holds the shared measurements (:data:`_SHARED`) already made; those
     the figure asks for are made and added to it when missing.
     """
-    mod = module(name, package)
     shared = {} if shared is None else shared
-    params = inspect.signature(mod.measure).parameters
     kwargs = {}
-    for key, fn in _SHARED.items():
-        if key in params:
-            if key not in shared:
-                shared[key] = fn(profile)
-            kwargs[key] = shared[key]
-    rows = mod.measure(profile, **kwargs)
+    for key in _needs(name, package):
+        if key not in shared:
+            shared[key] = _SHARED[key](profile)
+        kwargs[key] = shared[key]
+    rows = module(name, package).measure(profile, **kwargs)
     return rows if isinstance(rows, Rows) else Rows(rows)
 
 
@@ -159,8 +162,7 @@ def make(names_, out_dir, profile: Profile | None = None, *, package: str = __na
     if not isinstance(profile, Profile):
         raise ValueError(f"profile must be a Profile, got {type(profile).__name__}")
     # a shared measurement is kept until the last figure of the run that asks for it
-    last_use = {key: i for i, name in enumerate(todo) for key in _SHARED
-                if key in inspect.signature(module(name, package).measure).parameters}
+    last_use = {key: i for i, name in enumerate(todo) for key in _needs(name, package)}
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     shared, written = {}, []
     bar = tqdm(todo, desc="figures", unit="figure", disable=not progress)

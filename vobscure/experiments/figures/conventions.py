@@ -79,7 +79,7 @@ def measure(profile) -> Rows:
     """
     from ... import scenes
     from ...camera import Camera
-    from ...gbuffer import render_gbuffer
+    from ...render import render_gbuffer
     from ...groundtruth import ground_truth
 
     scene = scenes.crease()

@@ -115,7 +115,7 @@ class _Setup:
 def _setup(size: tuple, seed: int, ref_samples: int, noise: bool) -> _Setup:
     """The G-buffer, radius, references and the lines' limit of one measurement."""
     from ... import scenes
-    from ...gbuffer import render_gbuffer
+    from ...render import render_gbuffer
     from ...metrics import error
     from ...screenspace import vo_line, vo_reference
     from ..common import default_radius

@@ -75,7 +75,7 @@ def measure(profile) -> Rows:
         1: ground truth); arrays: the eight images and the truths' standard errors.
     """
     from ... import scenes
-    from ...gbuffer import render_gbuffer
+    from ...render import render_gbuffer
     from ...groundtruth import ground_truth
     from ...screenspace import bilateral_blur, combine_radii, vo_line
 

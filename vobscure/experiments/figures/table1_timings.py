@@ -177,7 +177,7 @@ def _paper_baseline(row) -> float:
 def _measure(size, seed, normal_clamp, runs) -> dict:
     """``{row: {column: seconds}}`` for this library's rows."""
     from ... import methods, scenes
-    from ...gbuffer import render_gbuffer
+    from ...render import render_gbuffer
     from ...screenspace import bilateral_blur, combine_radii, vo_line
     from ..common import default_radius, time_calls
     from .fig8_dual_radii import RADII

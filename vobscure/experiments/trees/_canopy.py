@@ -118,7 +118,7 @@ def canopy_images(name: str, *, size=(64, 64), rays: int = 128, seed: int = 0, q
     """
     from ... import trees as T
     from ...camera import Camera
-    from ...gbuffer import render_gbuffer
+    from ...render import render_gbuffer
 
     run = _measurements(quick, seed, measurements)
     scene = _scene(run, name)

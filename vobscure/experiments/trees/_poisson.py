@@ -91,7 +91,7 @@ def _poisson_pixels(run, name: str, shell_label: str) -> dict:
     """Per-pixel truth (both weightings) and both models on one scene's view."""
     from ... import trees as T
     from ...camera import Camera
-    from ...gbuffer import render_gbuffer
+    from ...render import render_gbuffer
 
     seed = run.seed
     px = POISSON_PIXELS[run.quick]
