@@ -2,7 +2,8 @@
 (:func:`as_scene`, :func:`resolve`) of a scene argument; vegetation scenes (leaf clouds, trees,
 grass) with open, two-sided foliage in :mod:`vobscure.scenes.vegetation`."""
 
-from . import _resolve, _scene, procedural, vegetation
+from . import _alpha, _resolve, _scene, procedural, vegetation
+from ._alpha import AlphaMask
 from ._resolve import as_scene, check_spec, resolve
 from ._scene import Scene
 from .io import DegenerateFacesWarning, load
@@ -12,6 +13,7 @@ from .vegetation import grass, leaf_cloud, leaf_cloud_dense, leaf_points, tree, 
 # every public name of the submodules, but of io only the loader and its warning
 __all__ = [
     *_scene.__all__,
+    *_alpha.__all__,
     *_resolve.__all__,
     "load",
     "DegenerateFacesWarning",

@@ -8,6 +8,8 @@ from functools import cached_property
 import numpy as np
 import trimesh
 
+from ._alpha import AlphaMask
+
 __all__ = ["Scene"]
 
 
@@ -35,6 +37,9 @@ class Scene:
         :mod:`vobscure.scenes.vegetation`). Stored as a dict; empty by default. It is not part
         of the scene's geometry digest, and :meth:`scaled` does not carry it over (its lengths
         would be wrong).
+    alpha : mapping of str to AlphaMask, optional
+        Alpha-tested meshes (leaf cards, curtains, chains): mesh name -> its
+        :class:`~vobscure.scenes.AlphaMask`. Texels below the cutoff are holes for every ray.
 
     Attributes
     ----------
@@ -58,6 +63,8 @@ class Scene:
         epsilon in the library is relative to.
     metadata : dict
         See Parameters.
+    alpha : dict of str to AlphaMask
+        See Parameters; empty when every mesh is opaque.
 
     Examples
     --------
@@ -70,7 +77,8 @@ class Scene:
     """
 
     def __init__(self, meshes, *, name: str | None = None, view: Mapping | None = None,
-                 smooth_angle: float | Mapping = 60.0, metadata: Mapping | None = None):
+                 smooth_angle: float | Mapping = 60.0, metadata: Mapping | None = None,
+                 alpha: Mapping | None = None):
         if isinstance(meshes, trimesh.Trimesh):
             meshes = {"mesh": meshes}
         if not isinstance(meshes, Mapping) or not meshes:
@@ -113,6 +121,7 @@ class Scene:
         if metadata is not None and not isinstance(metadata, Mapping):
             raise ValueError(f"metadata must be a mapping or None, got {type(metadata).__name__}")
         self.metadata: dict = dict(metadata) if metadata is not None else {}
+        self.alpha: dict[str, AlphaMask] = _check_alpha(alpha, clean)
 
     def __repr__(self) -> str:
         return (f"Scene({self.name!r}, meshes={list(self.meshes)}, triangles={len(self.triangles)}, "
@@ -167,12 +176,33 @@ class Scene:
             view["target"] = tuple(np.asarray(view["target"], float) * factor)
             if view.get("ortho_height") is not None:
                 view["ortho_height"] = view["ortho_height"] * factor
-        return Scene(meshes, name=self.name, view=view, smooth_angle=self.smooth_angle)
+        return Scene(meshes, name=self.name, view=view, smooth_angle=self.smooth_angle, alpha=self.alpha)
 
     @property
     def mesh(self) -> trimesh.Trimesh:
         """All meshes concatenated into one (vertices not merged across meshes)."""
         return trimesh.util.concatenate(list(self.meshes.values()))
+
+
+def _check_alpha(alpha, meshes: dict) -> dict:
+    """``alpha`` as a dict of mesh name -> AlphaMask, checked against the meshes' faces."""
+    if alpha is None:
+        return {}
+    if not isinstance(alpha, Mapping):
+        raise ValueError(f"alpha must be a mapping of mesh name -> AlphaMask or None, got {type(alpha).__name__}")
+    out = {}
+    for key, mask in alpha.items():
+        key = str(key)
+        if key not in meshes:
+            raise ValueError(f"alpha names mesh {key!r}, which the scene does not have "
+                             f"(meshes: {', '.join(meshes)})")
+        if not isinstance(mask, AlphaMask):
+            raise ValueError(f"alpha[{key!r}] must be a vobscure.scenes.AlphaMask, got {type(mask).__name__}")
+        if len(mask.uv) != len(meshes[key].faces):
+            raise ValueError(f"alpha[{key!r}] has texture coordinates for {len(mask.uv)} faces; "
+                             f"the mesh has {len(meshes[key].faces)}")
+        out[key] = mask
+    return out
 
 
 def _corner_normals(mesh: trimesh.Trimesh, smooth_angle: float) -> np.ndarray:

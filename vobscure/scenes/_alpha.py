@@ -1,0 +1,69 @@
+"""Alpha-tested geometry: the texture coordinates, alpha texture and cutoff of one mesh.
+
+A mesh with an :class:`AlphaMask` is solid only where the alpha texture, looked up at the
+interpolated texture coordinates, is at least the cutoff; elsewhere it is a hole that rays
+pass through in both directions (the alpha test of a rasterizer, MTL ``map_d`` and glTF
+``alphaMode: MASK``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["AlphaMask"]
+
+
+@dataclass(frozen=True, eq=False)
+class AlphaMask:
+    """The alpha test of one mesh of a :class:`~vobscure.scenes.Scene`.
+
+    Parameters
+    ----------
+    uv : (f, 3, 2) float
+        Texture coordinates of each corner of each face of the mesh, faces in the mesh's
+        order. OpenGL / OBJ convention: u to the right, v up, (0, 0) the bottom-left corner
+        of the texture; coordinates outside [0, 1] repeat.
+    texture : (h, w) float
+        Alpha in [0, 1]; row 0 is the top of the image (v = 1).
+    cutoff : float
+        Texels with alpha below it are holes (glTF ``alphaCutoff``, 0.5 by default).
+    source : str
+        Where the mask came from (file and material), for messages.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = AlphaMask(np.zeros((2, 3, 2)), np.ones((4, 4)))
+    >>> m.uv.shape, m.texture.dtype, m.cutoff
+    ((2, 3, 2), dtype('float32'), 0.5)
+    """
+
+    uv: np.ndarray
+    texture: np.ndarray
+    cutoff: float = 0.5
+    source: str = ""
+
+    def __post_init__(self):
+        uv = np.asarray(self.uv, dtype=np.float64)
+        if uv.ndim != 3 or uv.shape[1:] != (3, 2):
+            raise ValueError(f"AlphaMask uv must have shape (faces, 3, 2), got {uv.shape}")
+        if not np.all(np.isfinite(uv)):
+            raise ValueError(f"AlphaMask uv{self._where()} holds NaN or inf texture coordinates")
+        tex = np.asarray(self.texture, dtype=np.float32)
+        if tex.ndim != 2 or tex.size == 0:
+            raise ValueError(f"AlphaMask texture{self._where()} must be a non-empty (height, width) "
+                             f"array, got shape {tex.shape}")
+        if not np.all(np.isfinite(tex)) or tex.min() < 0 or tex.max() > 1:
+            raise ValueError(f"AlphaMask texture{self._where()} must hold alpha values in [0, 1]")
+        cutoff = float(self.cutoff)
+        if not 0.0 <= cutoff <= 1.0:
+            raise ValueError(f"AlphaMask cutoff must be in [0, 1], got {self.cutoff!r}")
+        object.__setattr__(self, "uv", uv)
+        object.__setattr__(self, "texture", np.ascontiguousarray(tex))
+        object.__setattr__(self, "cutoff", cutoff)
+        object.__setattr__(self, "source", str(self.source))
+
+    def _where(self) -> str:
+        return f" ({self.source})" if self.source else ""
