@@ -62,3 +62,17 @@ def crease_bent_normal(c):
     b_x = 2.0 / 3.0 * (1.0 - c * c) ** 1.5
     b_y = np.pi / 3.0 + np.pi * c / 2.0 - np.pi * c ** 3 / 6.0
     return np.stack([b_x, b_y, np.zeros_like(c)], axis=-1)
+
+
+def slab_shell_vo(depth, radius=1.0):
+    """World-space VO of the ball of radius R centred on a point of a plane when only a layer
+    ``depth`` deep below the plane is solid (the shell reference seen along a straight line
+    through the plane): one minus the volume of the ball between the plane and ``depth`` below
+    it, over the ball's volume. The layer is two spherical caps' difference, a cap of height h
+    having volume pi h^2 (3R - h) / 3."""
+    h = np.minimum(np.asarray(depth, dtype=float), radius)
+
+    def cap(height):
+        return np.pi * height**2 * (3 * radius - height) / 3
+
+    return 1.0 - (cap(radius) - cap(radius - h)) / (4.0 / 3.0 * np.pi * radius**3)

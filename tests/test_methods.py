@@ -312,12 +312,15 @@ def test_hegeman_ground_pixels_use_the_occluder_model():
 def test_compare_on_a_vegetation_scene_runs_the_models_against_the_sky():
     res = vo.experiments.compare.compare("leaf_cloud", size=(16, 16), quick=True, cache=False,
                                          write=False, suggest=False)
-    assert res.provenance["references"] == ["screen", "ao", "sky"]     # open leaves: no world VO
+    # open leaves: the shell VO stands in for the solid world-space VO, and the verdict says why
+    assert res.provenance["references"] == ["screen", "shell", "ao", "sky"]
+    assert res.provenance["missing_references"] == {"volumetric": "shell"}
+    assert "No 'volumetric' reference" in res.summary["text"][0] and "(leaves)" in res.summary["text"][0]
     rows = {r["label"]: r for r in res.rows}
     assert rows["hegeman"]["own_reference"] == "sky" and rows["hegeman"]["taps_per_pixel"] == 0
-    assert rows["line:9"]["own_reference"] == "screen"                # no world-space VO here
+    assert rows["line:9"]["own_reference"] == "shell"
     refs = {(g["reference"], g["error"]) for g in res.summary["groups"]}
-    assert ("sky", "own_rmse") in refs and ("screen", "own_rmse") in refs
+    assert ("sky", "own_rmse") in refs and ("shell", "own_rmse") in refs and ("screen", "screen_rmse") in refs
     # the canopy model is not ranked against the screen-space VO, a different quantity
     screen = next(g for g in res.summary["groups"] if g["reference"] == "screen")
     assert not any(label.startswith("hegeman") for label in screen["front_time"] + screen["front_taps"])

@@ -440,12 +440,37 @@ def _check_closed(scene: Scene, allow_open: bool) -> None:
     raise ValueError(
         f"volumetric obscurance needs closed, consistently wound meshes to tell inside from outside; "
         f"mesh(es) {bad} are not. Repair them (e.g. trimesh.repair.fill_holes) or pass "
-        f"allow_open=True (`vobscure render --allow-open`) to accept an inside test that may be "
-        f"wrong near the holes.")
+        f"allow_open=True (`--allow-open` on the command line) to accept an inside test that may be "
+        f"wrong near the holes, or use the shell model, defined for open surfaces: thickness= here, "
+        f"the reference 'shell' in vobscure compare (docs/groundtruth.md).")
+
+
+def _shell_occupied(tracer, q, shell) -> np.ndarray:
+    """(n,) bool: the shell model's occupancy of world points ``q`` (docs/groundtruth.md, "The
+    shell reference"): occupied when a surface lies within the view depth ``thickness`` in front
+    of the point, along the ray from the point towards the camera.
+
+    ``shell`` is ``(eye, forward, perspective, thickness)``. Under perspective the ray leaves
+    towards the eye, and view depth falls by z / |x - eye| per unit length along it, so the
+    thickness t is t |x - eye| / z of ray (capped at the eye); under an orthographic camera, and
+    for a point not in front of the eye (z <= 0), the ray runs against the view direction for t.
+    """
+    eye, forward, perspective, thickness = shell
+    n = len(q)
+    directions = np.broadcast_to(-forward, (n, 3)).copy()
+    tfar = np.full(n, thickness)
+    if perspective:
+        rel = q - eye
+        z = rel @ forward
+        dist = np.linalg.norm(rel, axis=1)
+        front = z > 0
+        directions[front] = -rel[front] / dist[front, None]
+        tfar[front] = np.minimum(thickness * dist[front] / z[front], dist[front])
+    return tracer.occluded(q, directions, tfar, threads=1)
 
 
 def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes, groups,
-                threads, progress, desc="volumetric obscurance"):
+                threads, progress, desc="volumetric obscurance", shell=None):
     tracer = scene.tracer
     rho, rho_mean = VO_FALLOFFS[falloff]
     # antithetic pairs: each base point x also gives -x, so m base points make 2 m samples
@@ -469,6 +494,10 @@ def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes
         r2 = np.sum(x * x, axis=-1)
         world = points[s][:, None, None, :] + radius * x
         q = world.reshape(-1, 3)
+        if shell is not None:
+            occupied = _shell_occupied(tracer, q, shell).reshape(P, g, 2 * m)
+            w = rho(r2) / rho_mean
+            return np.mean(w * ~occupied, axis=2)
         # Inside test: a point is inside a closed, outward-wound solid when the first
         # surface a ray from it meets faces away from it (the ray is leaving). Majority
         # of `votes` rays in independent random directions.
@@ -500,8 +529,9 @@ def _check_votes(votes) -> int:
 
 def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_clamp: bool = False,
                           samples: int = 4096, falloff: str = "constant", seed=0, votes: int = 3,
-                          allow_open: bool = False, groups: int = DEFAULT_GROUPS,
-                          threads: int | None = None, progress: bool = False) -> Estimate:
+                          allow_open: bool = False, thickness=None, camera=None,
+                          groups: int = DEFAULT_GROUPS, threads: int | None = None,
+                          progress: bool = False) -> Estimate:
     r"""World-space Volumetric Obscurance: the unoccupied fraction of a ball around each point.
 
     .. math:: V(P) = \int_X \rho(d(P, x)) O(x) \, dx \Big/ \int_X \rho(d(P, x)) \, dx
@@ -534,6 +564,15 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
         Odd number of rays per inside test (majority vote; default 3).
     allow_open : bool
         Accept meshes that are not closed (the inside test may then be wrong).
+    thickness : float, optional
+        The shell model instead of the inside test: every surface is a solid ``thickness``
+        thick in view depth behind it, seen from ``camera`` -- a point is occupied when a surface
+        lies within view depth ``thickness`` in front of it along its ray to the camera
+        (docs/groundtruth.md, "The shell reference"). Defined for any scene, closed or not; the
+        thickness model of the screen-space estimators (Loos & Sloan 2010, Sec. 4.3) applied to
+        every surface, hidden and off-screen ones included. None: the solid model (closed scenes).
+    camera : Camera, optional
+        The view of the shell model (required with ``thickness``; it needs a pose).
     groups, threads, progress
         As in :func:`ambient_occlusion` (``progress`` off by default).
 
@@ -570,10 +609,28 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
     samples = check_int(samples, "samples", minimum=2)
     check_choice(falloff, "falloff", VO_FALLOFFS)
     votes = _check_votes(votes)
-    _check_closed(scene, allow_open)
+    shell = _shell(thickness, camera)
+    if shell is None:
+        _check_closed(scene, allow_open)
     return _volumetric(scene, points, normals if normal_clamp else None, radius=radius, samples=samples,
                        falloff=falloff, seed=seed, votes=votes, groups=groups, threads=threads,
-                       progress=progress)
+                       progress=progress, shell=shell)
+
+
+def _shell(thickness, camera):
+    """``(eye, forward, perspective, thickness)`` of the shell model, or None for the solid one."""
+    from .camera import Camera
+
+    if thickness is None:
+        return None
+    thickness = check_positive(thickness, "thickness")
+    if not isinstance(camera, Camera):
+        raise ValueError("thickness (the shell model) needs camera: the view whose depth the thickness is "
+                         f"measured in, a vobscure Camera; got {type(camera).__name__}")
+    if not camera.has_pose:
+        raise ValueError("thickness (the shell model) needs a camera with a pose (where it is in the world)")
+    return (np.asarray(camera.eye, np.float64), np.asarray(camera.forward, np.float64),
+            bool(camera.is_perspective), thickness)
 
 
 #: What :func:`ground_truth` computes (its ``quantity``). The references an estimate is scored
@@ -589,7 +646,8 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
                  rays: int = 256, samples: int = 4096, falloff=None, weighting: str = "cosine",
                  normal_clamp: bool = False, seed=0, votes: int = 3, progress: bool = False,
                  groups: int = DEFAULT_GROUPS, threads: int | None = None,
-                 allow_open: bool = False, bounces: int = 0, albedo: float = 0.0) -> Estimate:
+                 allow_open: bool = False, thickness=None, bounces: int = 0,
+                 albedo: float = 0.0) -> Estimate:
     """The ray-cast reference at every pixel of a G-buffer.
 
     Parameters
@@ -612,6 +670,10 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         "constant" for volumetric). Unused for ao.
     weighting, normal_clamp, seed, groups, threads, allow_open
         Passed on.
+    thickness : float, optional
+        ``"volumetric"`` only: the shell model of :func:`volumetric_obscurance`, surfaces this
+        thick in the view depth of the G-buffer's camera; any scene, closed or not. None: the
+        solid model, which needs a closed scene.
     bounces, albedo
         Interreflections for ``"ao"`` (see :func:`ambient_occlusion`); an error for the
         other quantities when ``bounces`` > 0.
@@ -642,6 +704,9 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
     elif quantity != "ao":
         raise ValueError(f"radius is required for quantity={quantity!r}")
+    if thickness is not None and quantity != "volumetric":
+        raise ValueError(f"thickness (the shell model) is defined for quantity='volumetric' only, "
+                         f"got quantity={quantity!r}")
     bounces, albedo = _check_bounces(bounces, albedo)
     if bounces and quantity != "ao":
         raise ValueError(f"bounces > 0 is defined for quantity='ao' only, got quantity={quantity!r}")
@@ -665,11 +730,13 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         falloff = DEFAULT_FALLOFF[quantity] if falloff is None else falloff
         check_choice(falloff, "falloff", VO_FALLOFFS)
         votes = _check_votes(votes)
-        _check_closed(scene, allow_open)
+        shell = _shell(thickness, gbuffer.camera)
+        if shell is None:
+            _check_closed(scene, allow_open)
         est = _volumetric(scene, points, normals if normal_clamp else None, radius=radius,
                           samples=check_int(samples, "samples", minimum=2), falloff=falloff,
                           seed=seed, votes=votes, groups=groups, threads=threads, progress=progress,
-                          desc=desc)
+                          desc=desc if shell is None else "ground truth (shell)", shell=shell)
     value = np.full(valid.shape, np.nan)
     stderr = np.full(valid.shape, np.nan)
     value[valid] = est.value

@@ -22,7 +22,7 @@ Examples
 --------
 >>> from vobscure import references
 >>> references.names()
-('screen', 'volumetric', 'ao', 'ao_uniform', 'obscurance', 'sky', 'sky_uniform')
+('screen', 'volumetric', 'shell', 'ao', 'ao_uniform', 'obscurance', 'sky', 'sky_uniform')
 >>> sky = references.get("sky")
 >>> sky.ground_truth, sky.weighting, sky.limited, sky.samples, sky.quantity(normal_clamp=True)
 ('ao', 'cosine', False, 'rays', 'sky visibility')
@@ -36,11 +36,16 @@ from dataclasses import dataclass
 
 from .groundtruth import QUANTITIES as GROUND_TRUTH_QUANTITIES
 
-__all__ = ["Reference", "Quantity", "REFERENCES", "QUANTITIES", "SAMPLE_PARAMETERS", "get", "names"]
+__all__ = ["Reference", "Quantity", "REFERENCES", "QUANTITIES", "SAMPLE_PARAMETERS", "SHELL_THICKNESS", "WORLD_VO",
+           "get", "names", "usable"]
 
 #: The sampling parameters of the references, as named in a sweep configuration and in
 #: ``vobscure compare``, and the keyword of the computing function each is passed as.
 SAMPLE_PARAMETERS = {"rays": "rays", "volume_samples": "samples", "screen_samples": "samples"}
+#: The thickness of the shell reference's surfaces when the estimate has none, as a fraction of
+#: the ball radius: every surface is as thick as the ball is wide in view depth, so that
+#: within a ball nothing behind a surface is taken as empty (docs/groundtruth.md).
+SHELL_THICKNESS = 1.0
 #: The estimate's options a reference may share with it (passed on under the same name).
 _SHARED_OPTIONS = ("normal_clamp", "thickness", "falloff", "allow_open")
 
@@ -78,6 +83,12 @@ class Reference:
         :func:`vobscure.vo_reference` is the limit of an estimator of its quantities with
         infinitely many samples, so that an estimate's error against the screen reference is
         its sampling error alone.
+    default_thickness : float or None
+        With ``"thickness"`` among its options: the thickness, as a fraction of the ball radius,
+        used when the estimate has none (the shell reference's surfaces must have one).
+    stand_in : str or None
+        The reference that scores an estimate of its quantity when this one cannot be computed
+        on the scene (a scene that is not closed): ``"shell"`` for ``"volumetric"``.
     summary : str
         One line for ``--help`` and the docs.
     """
@@ -92,6 +103,8 @@ class Reference:
     options: tuple = ()
     closed_scene: bool = False
     screen_limit: bool = False
+    default_thickness: float | None = None
+    stand_in: str | None = None
     summary: str = ""
 
     def __post_init__(self):
@@ -103,6 +116,8 @@ class Reference:
         if self.samples not in SAMPLE_PARAMETERS:
             raise ValueError(f"Reference {self.name!r}: samples must be one of {', '.join(SAMPLE_PARAMETERS)}, "
                              f"got {self.samples!r}")
+        if self.default_thickness is not None and "thickness" not in self.options:
+            raise ValueError(f"Reference {self.name!r}: default_thickness needs 'thickness' among its options")
         object.__setattr__(self, "options", tuple(self.options))
         for option in self.options:
             if option not in _SHARED_OPTIONS:
@@ -136,6 +151,8 @@ class Reference:
             raise ValueError(f"reference {self.name!r} needs {', '.join(missing)}")
         count = {SAMPLE_PARAMETERS[self.samples]: settings[self.samples]}
         shared = {k: settings[k] for k in self.options}
+        if self.default_thickness is not None and shared.get("thickness") is None:
+            shared["thickness"] = self.default_thickness * radius
         if not self.needs_scene:
             return dict(radius=radius, **count, **shared, seed=seed)
         args = dict(quantity=self.ground_truth, radius=radius if self.limited else None, seed=seed)
@@ -185,7 +202,13 @@ REFERENCES = _registry(
               summary="the converged screen-space VO (vobscure.vo_reference, same settings as the estimate)"),
     Reference("volumetric", "ball VO", "volumetric", "volume_samples", measures_clamped="half-ball VO",
               options=("falloff", "normal_clamp", "allow_open"), closed_scene=True, screen_limit=True,
-              summary="the ray-cast world-space VO of the ball (half-ball with the normal clamp)"),
+              stand_in="shell",
+              summary="the ray-cast world-space VO of the ball (half-ball with the normal clamp); closed scenes"),
+    Reference("shell", "shell ball VO", "volumetric", "volume_samples", measures_clamped="shell half-ball VO",
+              options=("falloff", "normal_clamp", "thickness"), screen_limit=True,
+              default_thickness=SHELL_THICKNESS,
+              summary="the ray-cast world-space VO of surfaces a thickness thick in view depth (the estimate's "
+                      "--thickness, else the radius): any scene, closed or not"),
     Reference("ao", "cosine AO", "ao", "rays", weighting="cosine",
               summary="ray-cast ambient occlusion within the radius, cosine-weighted"),
     Reference("ao_uniform", "uniform AO", "ao", "rays", weighting="uniform",
@@ -233,6 +256,27 @@ def lookup(registry: dict, name, what: str):
         return registry[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown {what} {name!r}; expected one of {', '.join(registry)}") from None
+
+
+#: The world-space VO references, in the order of preference: what the screen-space term of an
+#: error decomposition (:func:`vobscure.metrics.decompose`) is measured against.
+WORLD_VO = ("volumetric", "shell")
+
+
+def usable(name: str, scene) -> str | None:
+    """The reference that scores the quantity of reference ``name`` on ``scene``: ``name`` when it
+    can be computed there, else its :attr:`Reference.stand_in` (None when there is none).
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> usable("volumetric", vo.scenes.slab()), usable("volumetric", vo.scenes.leaf_cloud())
+    ('volumetric', 'shell')
+    """
+    ref = get(name)
+    if not ref.closed_scene or scene.is_watertight:
+        return name
+    return ref.stand_in
 
 
 def describe() -> str:

@@ -559,7 +559,7 @@ def _cached_signature(fn, positional: list) -> inspect.Signature:
 #: Parameters of :func:`vobscure.ground_truth` that enter the key, per quantity (besides the
 #: radius, the groups and the seed); the others do not change its numbers for that quantity.
 GROUND_TRUTH_KEY_PARAMS = {"ao": ("rays", "weighting"), "obscurance": ("rays", "weighting", "falloff"),
-                           "volumetric": ("samples", "falloff", "normal_clamp", "votes")}
+                           "volumetric": ("samples", "falloff", "normal_clamp", "votes", "thickness")}
 
 
 def ground_truth_cached(scene, gbuffer, *, cache, **params) -> tuple[Estimate, bool]:

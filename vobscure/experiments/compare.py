@@ -44,6 +44,7 @@ from .common import (default_radius, machine, markdown_table, new_figure, save_f
 from .sweeps import REFERENCES, InlineExecutor, SweepConfig, sweep
 
 __all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front", "orbit_cameras", "parse_methods",
+           "open_meshes", "missing_note", "panel_reference",
            "DEFAULT_METHODS", "DEFAULT_REFERENCES", "REFERENCES", "TARGET_FACTOR", "SUGGEST_THICKNESS"]
 
 #: The paper's Table 1 configurations (Loos & Sloan 2010): points 12 and 33, lines 5 and 9, area 1.
@@ -66,6 +67,11 @@ SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
 #: A thickness is recommended only when it lowers the RMSE by at least this fraction.
 SUGGEST_MIN_GAIN = 0.02
 _TERM_NAMES = {"sampling": "sampling", "screen": "screen-space model", "model": "VO-vs-AO model"}
+#: How the verdict names a reference a group of configurations is scored against.
+_REFERENCE_WORDS = {"screen": "the converged screen-space VO (the sampling error alone)",
+                    "volumetric": "the ray-cast world-space VO (the method's own quantity)",
+                    "shell": "the ray-cast shell VO (the world-space VO of surfaces of a stated thickness, "
+                             "standing in for the solid one on this open scene)"}
 
 parse_methods = _methods.parse
 
@@ -144,9 +150,46 @@ def _as_cache(cache):
     return ReferenceCache(cache)
 
 
-def _fits(reference: str, scene) -> bool:
-    """Whether the reference can be computed on the scene (an inside test needs a closed one)."""
-    return not _references.get(reference).closed_scene or scene.is_watertight
+def open_meshes(scene) -> list[str]:
+    """The names of the scene's meshes that are not closed and consistently wound (an inside
+    test cannot be made against them)."""
+    return [k for k, m in scene.meshes.items() if not (m.is_watertight and m.is_winding_consistent)]
+
+
+def _names(items, limit: int = 6) -> str:
+    items = list(items)
+    shown = ", ".join(items[:limit])
+    return shown + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+def missing_note(missing: dict, scene, thickness=None) -> str:
+    """The verdict's sentences on the references that could not be computed on the scene and
+    what scores their quantity instead (``missing``: name -> stand-in or None; ``thickness``:
+    the comparison's, None when it has none).
+
+    Examples
+    --------
+    >>> import vobscure as vo
+    >>> print(missing_note({"volumetric": None}, vo.scenes.leaf_cloud()))  # doctest: +ELLIPSIS
+    No 'volumetric' reference: it tells solid from empty space by an inside test, which needs closed meshes, and 1 of 1 mesh(es) are open (leaves).
+    """
+    bad = open_meshes(scene)
+    parts = []
+    for name, stand in missing.items():
+        why = (f"No {name!r} reference: it tells solid from empty space by an inside test, which needs closed "
+               f"meshes, and {len(bad)} of {len(scene.meshes)} mesh(es) are open ({_names(bad)}).")
+        if stand == "shell":
+            t = (f"{_references.SHELL_THICKNESS:g} x the radius thick in view depth (--thickness sets it)"
+                 if thickness is None else f"{thickness:.4g} thick in view depth (--thickness)")
+            why += (f" The VO estimators are scored against 'shell' instead: the ray-cast VO of surfaces {t}, "
+                    f"the thickness model applied to every surface, hidden and off-screen ones included "
+                    f"(docs/groundtruth.md); no thickness trials are run against it, since its thickness is "
+                    f"that choice. --allow-open computes {name!r} anyway, with an inside test that may be wrong "
+                    f"near the holes.")
+        elif stand:
+            why += f" Its quantity is scored against {stand!r} instead."
+        parts.append(why)
+    return " ".join(parts)
 
 
 def _row(result, metrics=METRICS) -> dict:
@@ -160,7 +203,8 @@ def _row(result, metrics=METRICS) -> dict:
     for name, rep in result.errors.items():
         for metric in metrics:
             row[f"{name}_{metric}"] = float(getattr(rep, metric))
-    own = c.own_reference if c.own_reference in result.errors else None
+    own = c.own_reference if c.own_reference in result.errors else _references.get(c.own_reference).stand_in
+    own = own if own in result.errors else None
     if own is None and "screen" in result.errors and _methods.QUANTITIES[c.quantity].screen_limit:
         own = "screen"
     row["own_reference"] = own
@@ -179,7 +223,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
             rays: int = 256, volume_samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
             out=None, cache=True, progress: bool = False, plots: bool = True,
-            write: bool = True) -> CompareResult:
+            write: bool = True, allow_open: bool = False) -> CompareResult:
     """Measure error, time and taps per pixel of screen-space estimators on one scene, and say
     which to use.
 
@@ -209,10 +253,13 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         The thickness model (Sec. 4.3) of every estimator and of the screen-space reference.
     references : sequence of str, optional
         Some of the registry :data:`vobscure.references.REFERENCES`; only these are computed.
-        Default ``("screen", "volumetric", "ao")``; on a scene that is not closed without
-        the references that need one (``"volumetric"``: the world-space VO needs an inside test), and on a vegetation scene
-        with ``"sky"`` (what the vegetation models estimate). The error decomposition needs
-        "screen" and "volumetric" (its model term also "ao").
+        Default ``("screen", "volumetric", "ao")`` and the reference of every method's own
+        quantity; on a scene that is not closed, a reference that needs one (``"volumetric"``:
+        the world-space VO needs an inside test) is replaced by its stand-in (``"shell"``, the
+        VO of surfaces a thickness thick), and the verdict says so, naming the open meshes; on
+        a vegetation scene with ``"sky"`` (what the vegetation models estimate). The error
+        decomposition needs "screen" and a world-space VO, "volumetric" or "shell" (its model
+        term also "ao").
     repeats : int
         Timed runs per configuration; the median is kept.
     rays : int
@@ -247,6 +294,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         Write the PNGs.
     write : bool
         False: write nothing at all (figure modules use the rows directly).
+    allow_open : bool
+        Compute ``"volumetric"`` on a scene that is not closed (an inside test that may be wrong
+        near the holes) instead of replacing it by ``"shell"``.
 
     Returns
     -------
@@ -282,21 +332,34 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     if methods is None:
         methods = DEFAULT_METHODS + ("," + VEGETATION_METHODS if vegetation else "")
     configs = parse_methods(methods)
+    allow_open = bool(allow_open)
+    missing = {}          # a reference the scene cannot have -> what stands in for it
     if references is None and frame:
         references = ("screen",)
     elif references is None:
-        references = tuple(r for r in DEFAULT_REFERENCES if _fits(r, sc))
-        references += ("sky",) if vegetation else ()
+        wanted = DEFAULT_REFERENCES + (("sky",) if vegetation else ())
         # and the reference of every requested method's own quantity (e.g. uniform AO for HBAO)
-        for c in configs:
-            own = c.reference(normal_clamp)
-            if own not in references and _fits(own, sc):
-                references += (own,)
+        wanted += tuple(c.reference(normal_clamp) for c in configs)
+        references = ()
+        for name in dict.fromkeys(wanted):
+            use = name if allow_open else _references.usable(name, sc)
+            if use != name:
+                missing[name] = use
+            if use is not None and use not in references:
+                references += (use,)
     references = tuple(references)
     if not references:
         raise ValueError("references must name at least one of " + ", ".join(_references.names()))
     for name in references:
         check_choice(name, "references", _references.names())
+        if not frame and not allow_open and _references.usable(name, sc) != name:
+            bad = open_meshes(sc)
+            stand = _references.get(name).stand_in
+            raise ValueError(f"reference {name!r} needs closed meshes (an inside test), and {len(bad)} of "
+                             f"{len(sc.meshes)} mesh(es) of {scene_name!r} are open ({_names(bad)}); use "
+                             + (f"{stand!r} (defined for open surfaces, docs/groundtruth.md) or " if stand else "")
+                             + "allow_open=True (--allow-open) to accept an inside test that may be wrong "
+                               "near the holes")
     repeats = check_int(repeats, "repeats")
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
     if thickness is not None:
@@ -323,7 +386,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     t_start = time.perf_counter()
     common = dict(scene=sc, camera=camera, normal_clamp=normal_clamp, thickness=thickness, seed=seed,
                   references=references, rays=rays, volume_samples=volume_samples,
-                  screen_samples=screen_samples, reference_seed=seed)
+                  screen_samples=screen_samples, reference_seed=seed, allow_open=allow_open)
     sweep_configs = [SweepConfig(method=c.method, samples=c.samples, fetch=c.fetch, radius=radius,
                                  repeats=repeats, **common) for radius in radii for c in configs]
     results = sweep(sweep_configs, executor=InlineExecutor(), cache=store, keep_images=True,
@@ -343,6 +406,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         thickness_trials = _thickness_trials(rows, images, all_refs, gb, normal_clamp=normal_clamp,
                                              seed=seed, repeats=repeats)
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
+    if missing:
+        summary["text"].insert(0, missing_note(missing, sc, thickness))
+    summary["missing_references"] = {k: dict(stand_in=v, open_meshes=open_meshes(sc)) for k, v in missing.items()}
     if frame:
         summary["text"].insert(0, "A G-buffer without its scene: the converged screen-space VO is the only "
                                   "reference possible (nothing can be ray cast), so these errors are the "
@@ -352,7 +418,10 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     provenance = dict(
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),
         methods=[c.label for c in configs], normal_clamp=bool(normal_clamp), thickness=thickness,
-        references=list(references), repeats=repeats, rays=rays, volume_samples=volume_samples,
+        references=list(references), missing_references=dict(missing), allow_open=allow_open,
+        shell_thickness=({f"{r:g}": (thickness if thickness is not None else _references.SHELL_THICKNESS * r)
+                          for r in radii} if "shell" in references else None),
+        repeats=repeats, rays=rays, volume_samples=volume_samples,
         screen_samples=screen_samples, seed=seed, orbit=orbit, quick=bool(quick),
         target_rmse=target_rmse, budget_ms=budget_ms,
         cache=None if not store.enabled else str(store.directory),
@@ -483,10 +552,8 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
             within = [r for r in sel if np.isfinite(r["seconds"]) and 1e3 * r["seconds"] <= budget_ms]
             g["best_in_budget"] = min(within, key=lambda r: r[col])["label"] if within else None
         groups.append(g)
-        if ref == "screen":
-            what = "the converged screen-space VO (the sampling error alone)"
-        else:
-            what = f"the ray-cast {'world-space VO' if ref == 'volumetric' else ref} (the method's own quantity)"
+        what = _REFERENCE_WORDS.get(ref, f"the ray-cast {_references.get(ref).measures} ({ref!r}, the method's "
+                                         f"own quantity)")
         by_label = {r["label"]: r for r in sel}
         lines = [f"Against {what} at R = {radius:.4g}: the most accurate is {best['label']} "
                  f"(RMSE {best[col]:.4f}, {_ms(best['seconds'])}, {best['taps_per_pixel']} taps/px)."]
@@ -521,7 +588,8 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
         sel = [r for r in shippable if r["radius"] == radius and "screen_error_rmse" in r and vo_estimator(r)]
         if not sel:
             continue
-        best = min(sel, key=lambda r: r.get("volumetric_rmse", np.inf))
+        world = next((w for w in _references.WORLD_VO if any(f"{w}_rmse" in r for r in sel)), "volumetric")
+        best = min(sel, key=lambda r: r.get(f"{world}_rmse", np.inf))
         terms = {t: best[f"{t}_error_rmse"] for t in ("sampling", "screen", "model") if f"{t}_error_rmse" in best}
         top = max(terms, key=terms.get)
         dominant.append(dict(radius=radius, label=best["label"], dominant=top, **{f"{t}_rmse": v for t, v in terms.items()}))
@@ -654,12 +722,20 @@ def _tradeoff(path, rows, provenance):
     return save_figure(fig, path)
 
 
+def panel_reference(row, available) -> tuple[str, bool]:
+    """The reference a gallery panel of ``row`` is scored against, the one the verdict scores it
+    against: its own quantity's (``own_reference``), else the first available in registry order;
+    and whether that is its own (False: the difference is model error, and the title says so)."""
+    own = row.get("own_reference")
+    if own in available:
+        return own, True
+    return next(n for n in _references.names() if n in available), False
+
+
 def _gallery(path, rows, refs, images, gb):
     radius = rows[0]["radius"]
     ref_imgs = refs[radius]
-    # the world-space truth when there is one, else the first in the registry's order
-    primary = "volumetric" if "volumetric" in ref_imgs else next(n for n in _references.names() if n in ref_imgs)
-    configs = [row["label"] for row in rows if row["radius"] == radius]
+    configs = [row for row in rows if row["radius"] == radius]
     ncol = max(len(ref_imgs), 4)
     per_row = max(ncol // 2, 1)
     nrow = 1 + math.ceil(len(configs) / per_row)
@@ -671,17 +747,19 @@ def _gallery(path, rows, refs, images, gb):
     for k, (name, img) in enumerate(ref_imgs.items()):
         axes[0, k].imshow(np.ma.masked_where(bg, img), cmap="gray", vmin=0, vmax=1)
         axes[0, k].set_title(f"reference: {name}", fontsize=8)
-    for n, label in enumerate(configs):
+    for n, row in enumerate(configs):
         r, c = 1 + n // per_row, 2 * (n % per_row)
+        label = row["label"]
         est = images[(radius, label)]
-        diff = est - ref_imgs[primary]
-        rmse = float(np.sqrt(np.nanmean(diff ** 2)))
+        against, own = panel_reference(row, ref_imgs)
+        diff = est - ref_imgs[against]
+        rmse = float(np.sqrt(np.nanmean(diff ** 2))) if np.isfinite(diff).any() else float("nan")
         axes[r, c].imshow(np.ma.masked_where(bg, est), cmap="gray", vmin=0, vmax=1)
         axes[r, c].set_title(label, fontsize=8)
         lim = max(float(np.nanmax(np.abs(diff))) if np.isfinite(diff).any() else 0.0, 1e-6)
         axes[r, c + 1].imshow(np.ma.masked_where(bg, diff), cmap="RdBu_r", vmin=-lim, vmax=lim)
-        axes[r, c + 1].set_title(f"error vs {primary}: RMSE {rmse:.3f}", fontsize=8)
-    fig.suptitle(f"R = {radius:.3g}: estimates and their error maps (red: too open)")
+        axes[r, c + 1].set_title(f"vs {against}{'' if own else ' (model error)'}: RMSE {rmse:.3f}", fontsize=8)
+    fig.suptitle(f"R = {radius:.3g}: estimates and their error against their own reference (red: too open)")
     return save_figure(fig, path)
 
 

@@ -449,8 +449,9 @@ def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
     runs = timings["run"].runs
     errors = {name: error(image, ref.value) for name, ref in refs.items()}
     decomposition = None
-    if "screen" in refs and "volumetric" in refs:
-        decomposition = decompose(image, refs["screen"].value, refs["volumetric"].value,
+    world = next((name for name in _references.WORLD_VO if name in refs), None)
+    if "screen" in refs and world is not None:
+        decomposition = decompose(image, refs["screen"].value, refs[world].value,
                                   ao=refs["ao"].value if "ao" in refs else None,
                                   obscurance=refs["obscurance"].value if "obscurance" in refs else None).as_dict()
     nan = float("nan")
