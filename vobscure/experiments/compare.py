@@ -398,6 +398,10 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         all_refs.setdefault(res.radius, {k: v.value for k, v in res.references.items()})
         hits.setdefault(res.radius, res.cache_hits)
     gb = results[0].gbuffer
+    if not gb.valid.any():
+        raise ValueError(f"the camera sees none of {scene_name!r}: no pixel of the {camera.width} x {camera.height} "
+                         f"image is covered, so there is nothing to score; aim it at the scene (--eye, --target, "
+                         f"--camera, or leave the default view)")
     if orbit > 1:
         _orbit(sc, camera, rows, configs, radii, orbit, normal_clamp=normal_clamp, thickness=thickness,
                screen_samples=screen_samples, seed=seed, cache=store, progress=progress)
