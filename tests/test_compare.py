@@ -288,3 +288,9 @@ def test_verdict_calls_a_poor_best_a_poor_fit():
     sky_text = next(s for s in text.values() if "ray-cast sky" in s)
     assert "poor fit: even the best is off by 0.33" in vo_text and "error split below" in vo_text
     assert "poor fit: even the best is off by 0.66" in sky_text and "object-space model" in sky_text
+
+
+def test_compare_refuses_a_view_that_sees_nothing():
+    away = vo.Camera.look_at((0, 0, 20), (0, 0, 40), size=(8, 8), fov_y=40)
+    with pytest.raises(ValueError, match="sees none of 'slab'"):
+        vo.experiments.compare.compare("slab", camera=away, methods="line:5", quick=True, cache=False, write=False)
