@@ -565,3 +565,17 @@ def test_blender_regenerates_the_same_frames(tmp_path, blender_view):
                                                 normal_path=_blender_paths(key, tmp_path)[1])
         assert found["depth_channel"] == blender_frames.FILES[key][2]
         _check_blender_depth(depth.astype(np.float64), blender_view, key.startswith("half"))
+
+
+def test_docs_depth_check_runs_on_blenders_file(tmp_path, monkeypatch, capsys):
+    """The check of docs/own-buffers.md ("Check what your renderer's depth holds") on Blender's
+    file prints what the docs say: one depth on the wall."""
+    text = (DOCS / "own-buffers.md").read_text()
+    section = text.split("**Check what your renderer's depth holds.**", 1)[1]
+    block = re.search(r"```python\n(.*?)```", section, flags=re.S).group(1)
+    (tmp_path / "frame.exr").write_bytes((blender_frames.DIR / "render" / "frame.exr").read_bytes())
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "__own_buffers__"}
+    exec(compile(block, str(DOCS / "own-buffers.md"), "exec"), namespace)
+    assert "wall depth from 8 to 8\n" in capsys.readouterr().out
+    assert namespace["wall"].size == 4 * 26 and np.ptp(namespace["wall"]) <= 8.0 * blender_frames.DEPTH_RTOL_ROUNDING
