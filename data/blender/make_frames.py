@@ -17,12 +17,12 @@ Writes to OUT_DIR, through Blender's own writers:
   ``ViewLayer``, Blender's default name);
 - ``frames.json`` -- Blender's version, the camera as Blender reports it after the render
   (``matrix_world``, vertical field of view), the render settings and every written file's
-  channels (name and pixel type), read back with Blender's ``OpenEXR``-free image loader
-  avoided: the channel list comes from the file header, parsed here.
+  channels (name and pixel type), parsed from the file's header here (no library needed
+  beyond bpy).
 
 The settings that make the passes comparable with a pinhole renderer that samples pixel
-centres: Cycles' pixel filter is a box 0.01 pixel wide, so every sample's ray leaves within
-0.005 pixel of the pixel's centre.
+centres: Cycles' pixel filter is 0.01 pixel wide (its minimum), so every sample's ray leaves
+within 0.005 pixel of the pixel's centre.
 """
 
 from __future__ import annotations
