@@ -7,6 +7,7 @@ import shutil
 import numpy as np
 import pytest
 
+import blender_frames
 import vobscure as vo
 from vobscure import cli
 from vobscure import io as vio
@@ -119,7 +120,7 @@ def test_a_sequence_runs_frame_by_frame_and_reports_flicker(frame, tmp_path, cap
                              "--radius", RADIUS, "--out", tmp_path / "vo")
     assert status == 0
     written = sorted(p.name for p in (tmp_path / "vo").iterdir())
-    assert written == ["f000_vo.exr", "f001_vo.exr", "f002_vo.exr"]
+    assert written == ["f000_line-9.exr", "f001_line-9.exr", "f002_line-9.exr"]
     assert "flicker: mean |V(t+1) - V(t)| = 0.00000" in stdout
     status, stdout, _ = _run(capsys, "--depth", frames, "--fov", 40, *_blender_args(frame), "--radius", RADIUS,
                              "--flicker-reference", 64, "--out", tmp_path / "vo2")
@@ -185,3 +186,106 @@ def test_channels_named_on_the_command_line(frame, tmp_path, capsys):
                           "--normal-channels", names, "--radius", RADIUS, "--quiet", "--out", tmp_path / "v.npy")
     assert status == 0, err
     np.testing.assert_allclose(np.load(tmp_path / "v.npy"), _expected(frame["gb"]), atol=TOL)
+
+
+# --------------------------------------------------------------------------- Blender 5's own files
+def test_blender_single_layer_files_by_default(tmp_path, capsys):
+    """The File Output node's two single-layer files (depth as R = G = B, normals as X/Y/Z),
+    nothing named: the channels used and the conversion counts are printed, one line each,
+    and the output is named after the frame (frameDepth.exr -> frame_gtao.exr)."""
+    np.savetxt(tmp_path / "pose.txt", blender_frames.pose())
+    d = blender_frames.DIR / "single"
+    status, stdout, err = _run(capsys, "--depth", d / "frameDepth.exr", "--normal", d / "frameNormal.exr",
+                               "--fov", blender_frames.record()["camera"]["fov_y_degrees"],
+                               "--pose", tmp_path / "pose.txt", "--normal-space", "world", "--background", "1e10",
+                               "--radius", RADIUS, "--method", "gtao", "--out", tmp_path / "vo")
+    assert status == 0, err
+    assert err == ""
+    lines = stdout.splitlines()
+    assert f"  depth: {d / 'frameDepth.exr'}, channel R (R = G = B: a grey image, as Blender's single-layer " \
+           "File Output writes a float)" in lines
+    assert f"  normals: {d / 'frameNormal.exr'}, channels X, Y, Z" in lines
+    gb = vo.render_gbuffer(blender_frames.scene(), blender_frames.camera())
+    covered, background = int(gb.valid.sum()), int((~gb.valid).sum())
+    assert f"  background pixels: {background} of 768 pixels (no surface: depth not finite or >= 1e+10)" in lines
+    for label in ("renormalized", "flipped", "repaired"):
+        assert any(line.startswith(f"  {label} normals: 0 of {covered} covered pixels") for line in lines), label
+    assert sorted(p.name for p in (tmp_path / "vo").iterdir()) == ["frame_gtao.exr"]
+    # the same as the library on the same files
+    cam = blender_frames.camera()
+    frame = vio.read_gbuffer((d / "frameDepth.exr", d / "frameNormal.exr"), camera=cam, normal_space="world",
+                             background=1e10)
+    expected = vo.methods.parse("gtao")[0].run(frame, radius=RADIUS, seed=0)
+    got = vio.exr_channels(tmp_path / "vo" / "frame_gtao.exr")["Y"]
+    np.testing.assert_array_equal(np.isnan(got), ~gb.valid)
+    assert np.nanmax(np.abs(got - expected)) <= TOL
+
+
+def test_conversion_counts_replace_the_warnings(frame, tmp_path, capsys):
+    """Known numbers of long, backward and zero normals: counted in one line each; no Python
+    warning (pytest turns one into an error)."""
+    gb = frame["gb"]
+    idx = np.flatnonzero(gb.valid)
+    normals = gb.world_normal.reshape(-1, 3).astype(np.float32).copy()
+    long, backward, zero = idx[:5], idx[5:12], idx[12:15]
+    normals[long] *= 1.5
+    normals[backward] *= -1.0
+    normals[zero] = 0.0
+    normals = normals.reshape(gb.shape + (3,))
+    channels = {"Depth.V": np.where(gb.valid, gb.depth, 1e10).astype(np.float32)}
+    channels.update({f"Normal.{a}": np.ascontiguousarray(normals[:, :, k]) for k, a in enumerate("XYZ")})
+    import OpenEXR
+
+    OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                 channels).write(str(tmp_path / "shot_depth_0007.exr"))
+    argv = ["--depth", tmp_path / "shot_depth_0007.exr", "--fov", gb.camera.fov_y, *_blender_args(frame),
+            "--radius", RADIUS, "--out", tmp_path / "out"]
+    status, _, err = _run(capsys, *argv)
+    assert status == 2 and "3 zero or NaN vector(s) on covered pixels" in err
+    status, stdout, err = _run(capsys, *argv, "--repair-normals")
+    assert status == 0, err
+    covered = int(gb.valid.sum())
+    assert f"  renormalized normals: 5 of {covered} covered pixels" in stdout
+    assert f"  flipped normals: 7 of {covered} covered pixels" in stdout
+    assert f"  repaired normals: 3 of {covered} covered pixels" in stdout
+    assert "Warning" not in stdout + err
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["shot_0007_line-9.exr"]
+
+
+def test_help_lists_the_methods(capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["estimate", "--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    screen = [n for n in vo.methods.names() if not vo.methods.get(n).needs_scene]
+    assert f"NAME one of {', '.join(screen)}" in " ".join(text.split())
+    for name in vo.methods.names():
+        assert f"\n  {name} (" in text
+
+
+def test_outputs_are_named_after_the_frame(frame, tmp_path, capsys):
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for name in ("Depth0001.exr", "Depth0002.exr"):
+        shutil.copy(frame["exr"], frames / name)
+    status, _, err = _run(capsys, "--depth", frames, "--fov", 40, *_blender_args(frame), "--radius", RADIUS,
+                          "--method", "point:12", "--quiet", "--out", tmp_path / "a")
+    assert status == 0, err
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["frame0001_point-12.exr", "frame0002_point-12.exr"]
+    status, _, err = _run(capsys, "--depth", frames, "--fov", 40, *_blender_args(frame), "--radius", RADIUS,
+                          "--quiet", "--out", tmp_path / "b" / "{frame}_{method}_{stem}.png")
+    assert status == 0, err
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == ["frame0001_line-9_Depth0001.png",
+                                                                  "frame0002_line-9_Depth0002.png"]
+
+
+def test_a_truncated_or_wrong_file_is_named(tmp_path, capsys):
+    data = (blender_frames.DIR / "render" / "frame.exr").read_bytes()
+    (tmp_path / "cut.exr").write_bytes(data[: len(data) // 2])
+    status, _, err = _run(capsys, "--depth", tmp_path / "cut.exr", "--fov", 50, "--radius", RADIUS,
+                          "--out", tmp_path / "vo.exr")
+    assert status == 2 and f"{tmp_path / 'cut.exr'}: not a readable OpenEXR file" in err
+    normal = blender_frames.DIR / "single" / "frameNormal.exr"
+    status, _, err = _run(capsys, "--depth", normal, "--fov", 50, "--radius", RADIUS, "--out", tmp_path / "vo.exr")
+    assert status == 2 and f"{normal}: no depth channel" in err and "the file has the channels A, X, Y, Z" in err
+    assert not (tmp_path / "vo.exr").exists()

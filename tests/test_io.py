@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+import blender_frames
 import vobscure as vo
 from vobscure import io as vio
 
@@ -411,3 +412,170 @@ def test_png_16_bit_normal_map_is_read_at_8_bits(tmp_path):
                                      + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
     _, normal, _ = vio.read_buffers((tmp_path / "d.npy", tmp_path / "n.png"))
     np.testing.assert_array_equal(normal[0] * 255, [[0x00, 0x80, 0xFF], [0x12, 0xAB, 0x7F]])
+
+
+# --------------------------------------------------------------------------- Blender 5's own files
+# data/blender holds what Blender 5.0.1 wrote (make_frames.py, Cycles); blender_frames.py the
+# same view rendered by vobscure and the tolerances, derived there.
+@pytest.fixture(scope="module")
+def blender_view():
+    return vo.render_gbuffer(blender_frames.scene(), blender_frames.camera())
+
+
+def _blender_paths(key, directory=blender_frames.DIR):
+    depth_file, normal_file, *_ = blender_frames.FILES[key]
+    return directory / depth_file, None if normal_file is None else directory / normal_file
+
+
+def test_blender_files_record_their_version():
+    rec = blender_frames.record()
+    assert rec["blender"].startswith("5.") and rec["engine"] == "CYCLES"
+    assert rec["size"] == [32, 24]
+
+
+@pytest.mark.parametrize("key", list(blender_frames.FILES))
+def test_blender_channels_are_found_by_default(key):
+    depth_path, normal_path = _blender_paths(key)
+    _, _, depth_name, normal_names, _ = blender_frames.FILES[key]
+    depth, normal, found = vio.read_buffers(depth_path, normal_path=normal_path)
+    assert found["depth_channel"] == depth_name and found["normal_channels"] == normal_names
+    assert found["depth"] == f"{depth_path}:{depth_name}"
+    assert depth.shape == (24, 32) and normal.shape == (24, 32, 3)
+
+
+def _check_blender_depth(depth, gb, half):
+    """Blender's depth is vobscure's linear depth within the derived tolerance on every
+    covered pixel, and is not the distance to the eye on any of them (float32) / by far."""
+    valid = gb.valid
+    tol = blender_frames.depth_rtol(gb, half=half)[valid]
+    rel_linear = np.abs(depth[valid] / gb.depth[valid] - 1)
+    assert (rel_linear <= tol).all(), f"linear: worst {np.max(rel_linear / tol):.3g} x the tolerance"
+    distance = np.linalg.norm(gb.world_position - gb.camera.eye, axis=-1)[valid]
+    rel_distance = np.abs(depth[valid] / distance - 1)
+    if not half:   # even the pixel next to the image centre is off by 1.9e-4 as a distance
+        assert (rel_distance > tol).all()
+    assert np.max(rel_distance / tol) > 100
+
+
+@pytest.mark.parametrize("key", list(blender_frames.FILES))
+def test_blender_depth_is_the_planar_view_z(key, blender_view):
+    depth_path, normal_path = _blender_paths(key)
+    half = key.startswith("half")
+    depth, normal, _ = vio.read_buffers(depth_path, normal_path=normal_path)
+    background = blender_frames.FILES[key][4]
+    np.testing.assert_array_equal(depth >= background, ~blender_view.valid)
+    np.testing.assert_array_equal(depth[~blender_view.valid], np.float32(background))
+    _check_blender_depth(depth.astype(np.float64), blender_view, half)
+    # world-space normals, zero on background
+    np.testing.assert_allclose(normal[blender_view.valid], blender_view.world_normal[blender_view.valid],
+                               rtol=0, atol=blender_frames.NORMAL_ATOL)
+    assert not normal[~blender_view.valid].any()
+
+
+def test_blender_wall_facing_the_camera_has_constant_depth(blender_view):
+    """What docs/own-buffers.md tells users to check: on a wall facing the camera the view z is
+    constant (the distance would grow towards the edges)."""
+    depth, _, _ = vio.read_buffers(blender_frames.DIR / "render" / "frame.exr")
+    scene = blender_frames.scene()
+    wall = blender_view.valid & (blender_view.primitive >= 0)
+    wall &= scene.mesh_index[np.maximum(blender_view.primitive, 0)] == list(scene.meshes).index("wall")
+    wall &= np.isclose(blender_view.world_normal[..., 1], -1.0)
+    assert wall.sum() > 100
+    assert np.ptp(depth[wall]) <= 8.0 * blender_frames.DEPTH_RTOL_ROUNDING   # z = 8 on the wall
+
+
+def test_blender_read_gbuffer_gives_vobscures_gbuffer(blender_view):
+    pose = blender_frames.pose()
+    cam = blender_frames.camera()
+    gb = vio.read_gbuffer(blender_frames.DIR / "render" / "frame.exr", camera=cam, normal_space="world",
+                          background=blender_frames.BACKGROUND)
+    np.testing.assert_array_equal(gb.valid, blender_view.valid)
+    assert gb.conversion["source"]["depth_channel"] == "ViewLayer.Depth.Z"
+    assert gb.conversion["background"] == int((~blender_view.valid).sum())
+    # view-space normals: the world normals rotated by the float32 pose, as vobscure's camera
+    np.testing.assert_allclose(gb.normal[gb.valid], blender_view.normal[gb.valid], rtol=0, atol=1e-6)
+    assert np.allclose(pose[:3, 2], -cam.forward)
+
+
+def test_blender_multipart_channels_are_not_doubled():
+    names = vio.exr_channels(blender_frames.DIR / "render" / "frame.exr")
+    assert sorted(names) == sorted(f"ViewLayer.{p}.{c}" for p, cs in (("Combined", "RGBA"), ("Depth", "Z"),
+                                                                      ("Normal", "XYZ")) for c in cs)
+
+
+# --------------------------------------------------------------------------- bad Blender-like input
+def test_a_truncated_exr_is_named(tmp_path):
+    data = (blender_frames.DIR / "render" / "frame.exr").read_bytes()
+    for cut in (len(data) // 2, 40):
+        path = tmp_path / f"cut{cut}.exr"
+        path.write_bytes(data[:cut])
+        with pytest.raises(ValueError, match=rf"{re.escape(str(path))}: not a readable OpenEXR file"):
+            vio.read_buffers(path)
+
+
+def test_a_normal_file_given_as_depth_lists_its_channels():
+    path = blender_frames.DIR / "single" / "frameNormal.exr"
+    with pytest.raises(ValueError) as err:
+        vio.read_buffers(path)
+    message = str(err.value)
+    assert message.startswith(f"{path}: no depth channel") and "the file has the channels A, X, Y, Z" in message
+    assert "a normal file?" in message and "depth_channel=" in message
+
+
+def test_missing_normals_list_the_channels(tmp_path):
+    depth = blender_frames.DIR / "single" / "frameDepth.exr"
+    with pytest.raises(ValueError) as err:
+        vio.read_buffers(depth, normal_path=depth)     # the depth file again, as the normal file
+    assert f"{depth}: no normal channels" in str(err.value) and "the file has the channels A, B, G, R" in str(err.value)
+
+
+def test_ambiguous_choices_list_the_candidates(tmp_path):
+    d = np.ones((2, 3), np.float32)
+    _write_exr(tmp_path / "two.exr", {f"{lay}.{p}.{c}": d for lay in ("Left", "Right")
+                                      for p, cs in (("Depth", "Z"), ("Normal", "XYZ")) for c in cs})
+    with pytest.raises(ValueError, match=r"several depth channels \(Left.Depth.Z, Right.Depth.Z.*depth_channel="):
+        vio.read_buffers(tmp_path / "two.exr")
+    with pytest.raises(ValueError, match=r"several normal layers \(Left.Normal, Right.Normal.*normal_channels="):
+        vio.read_buffers(tmp_path / "two.exr", depth_channel="Left.Depth.Z")
+    _, normal, found = vio.read_buffers(tmp_path / "two.exr", depth_channel="Left.Depth.Z",
+                                        normal_channels="Right.Normal")
+    assert found["normal_channels"] == ("Right.Normal.X", "Right.Normal.Y", "Right.Normal.Z")
+    # a colour image is not a grey depth
+    _write_exr(tmp_path / "rgb.exr", {"R": d, "G": d, "B": 2 * d, "A": d})
+    with pytest.raises(ValueError, match=r"R, G, B differ.*the file has the channels A, B, G, R"):
+        vio.read_buffers(tmp_path / "rgb.exr")
+    _write_exr(tmp_path / "v.exr", {"V": 3 * d})
+    assert vio.read_buffers(tmp_path / "v.exr")[2]["depth_channel"] == "V"
+
+
+# --------------------------------------------------------------------------- regenerated by Blender
+@pytest.mark.slow
+def test_blender_regenerates_the_same_frames(tmp_path, blender_view):
+    """Runs data/blender/make_frames.py (needs bpy) and checks the new files as the committed ones."""
+    pytest.importorskip("bpy")
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_frames", blender_frames.DIR / "make_frames.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    rec = module.main(tmp_path)
+    assert rec["files"] == blender_frames.record()["files"]
+    for key in blender_frames.FILES:
+        depth, normal, found = vio.read_buffers(*_blender_paths(key, tmp_path)[:1],
+                                                normal_path=_blender_paths(key, tmp_path)[1])
+        assert found["depth_channel"] == blender_frames.FILES[key][2]
+        _check_blender_depth(depth.astype(np.float64), blender_view, key.startswith("half"))
+
+
+def test_docs_depth_check_runs_on_blenders_file(tmp_path, monkeypatch, capsys):
+    """The check of docs/own-buffers.md ("Check what your renderer's depth holds") on Blender's
+    file prints what the docs say: one depth on the wall."""
+    text = (DOCS / "own-buffers.md").read_text()
+    section = text.split("**Check what your renderer's depth holds.**", 1)[1]
+    block = re.search(r"```python\n(.*?)```", section, flags=re.S).group(1)
+    (tmp_path / "frame.exr").write_bytes((blender_frames.DIR / "render" / "frame.exr").read_bytes())
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "__own_buffers__"}
+    exec(compile(block, str(DOCS / "own-buffers.md"), "exec"), namespace)
+    assert "wall depth from 8 to 8\n" in capsys.readouterr().out
+    assert namespace["wall"].size == 4 * 26 and np.ptp(namespace["wall"]) <= 8.0 * blender_frames.DEPTH_RTOL_ROUNDING

@@ -17,6 +17,7 @@ import argparse
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -197,6 +198,15 @@ def _figures_main(args) -> int:
 # --------------------------------------------------------------------------- vobscure estimate
 #: Frames of at least this many pixels get a progress bar over the stages of their estimate.
 ESTIMATE_PROGRESS_PIXELS = 1 << 20
+#: Where `vobscure estimate` writes without --out (a directory).
+DEFAULT_ESTIMATE_OUT = "vobscure-out"
+#: The counts of GBuffer.conversion that `vobscure estimate` prints, one line each.
+CONVERSION_LINES = (
+    ("background", "background pixels", "no surface: depth not finite{background}"),
+    ("renormalized", "renormalized normals", "length off 1 by more than the tolerance, rescaled"),
+    ("flipped", "flipped normals", "facing away from the camera, turned towards it"),
+    ("repaired", "repaired normals", "zero or NaN on covered pixels, derived from the depth"),
+)
 
 
 def _frame_options(e, *, lens_required: bool) -> None:
@@ -230,9 +240,13 @@ def _frame_options(e, *, lens_required: bool) -> None:
                    help="EXR layer (e.g. 'View Layer.Normal') or X,Y,Z channel names, or NPZ array")
     e.add_argument("--depth-scale", type=float, default=None, metavar="S",
                    help="scene units per stored depth unit (required for PNG depth)")
+    e.add_argument("--repair-normals", action="store_true",
+                   help="derive zero or NaN normals of covered pixels from the depth (default: an error)")
 
 
 def _estimate_parser(sub) -> None:
+    from . import methods
+
     e = sub.add_parser("estimate", help="estimate the VO of your own frame(s) from depth (and normal) files",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="Estimate screen-space Volumetric Obscurance of a renderer's frame: read "
@@ -242,14 +256,19 @@ def _estimate_parser(sub) -> None:
                                    "with the same seed and reports the temporal flicker.",
                        epilog="example:\n  vobscure estimate --depth frame.exr --fov 39.6 --radius 0.5 "
                               "--out vo.exr\n  vobscure estimate --depth 'frames/*.exr' --fov 39.6 --radius 0.5 "
-                              "--out vo/")
+                              "--method gtao --out vo/\n  (writes vo/<frame>_gtao.exr for each frame)\n\n"
+                              "methods (--method NAME[:SAMPLES[:FETCH]], from vobscure.methods; the models that "
+                              "need the scene's description do not run on a frame):\n  "
+                              + methods.describe().replace("\n", "\n  "))
     e.add_argument("--depth", required=True, metavar="PATH",
                    help="depth file (.exr .npy .npz .pfm .png), a directory of them or a glob in quotes")
     e.add_argument("--normal", default=None, metavar="PATH",
                    help="normal file(s) when the normals are not in the depth file (same count as --depth)")
     _frame_options(e, lens_required=True)
     e.add_argument("--method", default="line:9", metavar="NAME[:SAMPLES[:FETCH]]",
-                   help="one screen-space configuration from vobscure.methods (default line:9)")
+                   help="one screen-space configuration from vobscure.methods, NAME one of "
+                        f"{', '.join(n for n in methods.names() if not methods.get(n).needs_scene)} "
+                        "(listed below; default line:9)")
     e.add_argument("--radius", type=float, required=True, help="ball radius in scene units")
     e.add_argument("--normal-clamp", action="store_true", help="half-ball VO (Sec. 4.4)")
     e.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), scene units")
@@ -259,9 +278,11 @@ def _estimate_parser(sub) -> None:
                    help="sequences: also compute the converged screen-space VO (vo_reference) with SAMPLES "
                         "samples per frame and subtract its frame-to-frame change from the flicker, as "
                         "`compare --orbit` does (default 0: report the raw change)")
-    e.add_argument("--out", type=Path, required=True, metavar="PATH",
-                   help="output .exr/.png/.npy/.pfm; for several frames a directory (EXR files "
-                        "<frame>_vo.exr) or a pattern with {stem}, e.g. 'vo/{stem}.png'")
+    e.add_argument("--out", type=Path, default=Path(DEFAULT_ESTIMATE_OUT), metavar="PATH",
+                   help="output .exr/.png/.npy/.pfm file, or a directory (EXR files <frame>_<method>.exr, "
+                        "<frame> the frame file's name without the word depth, e.g. frame0001_gtao.exr for "
+                        "frame0001_depth.exr), or a pattern with {frame}, {stem} (the file's name as it is) and "
+                        f"{{method}}, e.g. 'vo/{{frame}}.png' (default: the directory {DEFAULT_ESTIMATE_OUT}/)")
     e.add_argument("--bits", type=int, choices=(8, 16), default=8, help="PNG bit depth (default 8)")
     e.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
@@ -331,6 +352,8 @@ def _frame_reader(args):
     convert = {k: v for k, v in (("near", args.near), ("far", args.far), ("normal_space", args.normal_space),
                                  ("normal_encoding", args.normal_encoding), ("convention", args.convention),
                                  ("background", args.background)) if v is not None}
+    if getattr(args, "repair_normals", False):
+        convert["repair_normals"] = True
     if args.normal_space == "world" and pose is None and args.intrinsics is None and args.projection is None:
         raise ValueError("--normal-space world needs the camera's --pose")
 
@@ -346,7 +369,9 @@ def _frame_reader(args):
         kwargs = dict(convert)
         if found.get("normal_encoding") and "normal_encoding" not in kwargs:
             kwargs["normal_encoding"] = found["normal_encoding"]
-        return GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=args.depth_kind, **kwargs), camera
+        gb = GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=args.depth_kind, **kwargs)
+        gb.conversion["source"] = dict(found)
+        return gb, camera
 
     return read
 
@@ -355,6 +380,7 @@ def _estimate_main(args) -> int:
     from tqdm import tqdm
 
     from . import methods
+    from .convert import NormalsRenormalizedWarning, NormalsRepairedWarning
     from .io import write_image
     from .metrics import flicker
     from .screenspace import bilateral_blur, vo_reference
@@ -377,13 +403,22 @@ def _estimate_main(args) -> int:
     if not (np.isfinite(args.radius) and args.radius > 0):
         raise ValueError(f"--radius must be a finite number > 0, got {args.radius}")
     many = len(depth_paths) > 1
-    outs = _estimate_outputs(args.out, depth_paths)
+    outs = _estimate_outputs(args.out, depth_paths, _method_tag(args.method))
     read_frame = _frame_reader(args)
 
     frames, references, camera, started = [], [], None, time.perf_counter()
+    totals, sources = {key: 0 for key in ("pixels", "covered", "derived")}, []
+    totals.update((key, 0) for key, *_ in CONVERSION_LINES)
     bar = tqdm(total=len(depth_paths), desc="estimate", unit="frame", disable=args.quiet or not many)
     for depth_path, normal_path, out in zip(depth_paths, normal_paths, outs):
-        gb, camera = read_frame(depth_path, normal_path, camera)
+        with warnings.catch_warnings():
+            # the counts these warnings carry are printed below, one line each
+            warnings.simplefilter("ignore", NormalsRenormalizedWarning)
+            warnings.simplefilter("ignore", NormalsRepairedWarning)
+            gb, camera = read_frame(depth_path, normal_path, camera)
+        for key in totals:
+            totals[key] += int(gb.conversion[key])
+        sources.append(gb.conversion["source"])
         H, W = gb.valid.shape
         stages = tqdm(total=3 + args.blur, desc=depth_path.name, leave=False,
                       disable=args.quiet or many or H * W < ESTIMATE_PROGRESS_PIXELS)
@@ -413,6 +448,10 @@ def _estimate_main(args) -> int:
               f"{len(frames)} frame(s) of {camera.width}x{camera.height}, {seconds:.2f} s")
         print(f"  mean visibility {np.nanmean(last):.4f} over {int(np.isfinite(last).sum())} covered pixels "
               f"(last frame)" if np.isfinite(last).any() else "  no covered pixel (background only)")
+        for line in _source_lines(sources):
+            print(f"  {line}")
+        for line in _conversion_lines(totals, len(frames), args.background):
+            print(f"  {line}")
         if not many:
             print(f"  wrote {outs[0]}")
         else:
@@ -431,26 +470,98 @@ def _estimate_main(args) -> int:
     return 0
 
 
-def _estimate_outputs(out: Path, depth_paths) -> list[Path]:
+def _source_lines(sources) -> list[str]:
+    """Which files and channels the depth and normals came from (the first frame's, and how
+    many frames)."""
+    first, n = sources[0], len(sources)
+    every = "" if n == 1 else f" (the same channels in all {n} frames)"
+    depth = first["depth"]
+    if first.get("depth_channel") is not None:
+        name = first["depth_channel"]
+        depth = (f"{depth[: -len(name) - 1]}, channel {name}"
+                 + (" (R = G = B: a grey image, as Blender's single-layer File Output writes a float)"
+                    if name == "R" else ""))
+    lines = [f"depth: {depth}{every}"]
+    if first.get("normal_channels") is not None:
+        names = first["normal_channels"]
+        lines.append(f"normals: {first['normal'][: -len('/'.join(names)) - 1]}, channels {', '.join(names)}")
+    elif first.get("normal"):
+        lines.append(f"normals: {first['normal']}")
+    else:
+        lines.append("normals: none in the files; derived from the depth")
+    return lines
+
+
+def _conversion_lines(totals, frames: int, background) -> list[str]:
+    """One line per count of the conversion (:data:`CONVERSION_LINES`), summed over the frames."""
+    where = "" if frames == 1 else f", over {frames} frames"
+    extra = "" if background is None else f" or >= {background:g}"
+    lines = []
+    for key, label, meaning in CONVERSION_LINES:
+        if key != "background" and totals["derived"] == totals["covered"]:
+            continue    # the normals were all derived: nothing stored to renormalize, flip or repair
+        of = totals["pixels"] if key == "background" else totals["covered"]
+        lines.append(f"{label}: {totals[key]} of {of} {'pixels' if key == 'background' else 'covered pixels'}"
+                     f"{where} ({meaning.format(background=extra)})")
+    if totals["derived"]:
+        lines.append(f"derived normals: {totals['derived']} of {totals['covered']} covered pixels{where} (no normals "
+                     f"in the files)")
+    return lines
+
+
+def _method_tag(spec: str) -> str:
+    """The method as written on the command line, fit for a file name (``line:9`` -> ``line-9``)."""
+    return "".join(c if c.isalnum() or c in "-_." else "-" for c in spec.strip().replace(":", "-"))
+
+
+def _frame_name(path) -> str:
+    """A frame file's name without the word depth (and one separator next to it): the name
+    the outputs of `vobscure estimate` take. A name left empty or with digits only gets
+    ``frame`` in front.
+
+    Examples
+    --------
+    >>> [_frame_name(p) for p in ("frame0001_depth.exr", "frameDepth0001.exr", "Depth0001.exr",
+    ...                           "depth.exr", "shot_Depth_0001.exr", "hallway.exr", "zdepth.exr")]
+    ['frame0001', 'frame0001', 'frame0001', 'frame', 'shot_0001', 'hallway', 'zdepth']
+    """
+    import re
+
+    stem = Path(path).stem
+    m = re.search(r"Depth|DEPTH|(?<![a-z])depth(?![a-z])", stem)
+    if m is None:
+        return stem
+    before, after, seps = stem[:m.start()], stem[m.end():], ("_", "-", ".", " ")
+    if before.endswith(seps) and (after.startswith(seps) or not after):
+        before = before[:-1]
+    elif after.startswith(seps):
+        after = after[1:]
+    name = (before + after).strip("._- ")
+    return f"frame{name}" if not name or name.isdigit() else name
+
+
+def _estimate_outputs(out: Path, depth_paths, method: str) -> list[Path]:
     from .io import SUFFIXES
 
-    if len(depth_paths) == 1 and "{stem}" not in str(out):
-        if out.is_dir() or str(out).endswith(("/", os.sep)):
-            return [out / f"{depth_paths[0].stem}_vo.exr"]
+    pattern = any(key in str(out) for key in ("{stem}", "{frame}", "{method}"))
+    if len(depth_paths) == 1 and not pattern:
+        if out.is_dir() or str(out).endswith(("/", os.sep)) or out.suffix == "":
+            return [out / f"{_frame_name(depth_paths[0])}_{method}.exr"]
         if out.suffix.lower() not in (".exr", ".png", ".npy", ".pfm"):
             raise ValueError(f"--out {out}: the suffix must be .exr, .png, .npy or .pfm")
         if out.resolve() == depth_paths[0].resolve():
             raise ValueError(f"--out {out}: would overwrite the input frame")
         return [out]
-    if "{stem}" in str(out):
-        outs = [Path(str(out).replace("{stem}", p.stem)) for p in depth_paths]
+    if pattern:
+        outs = [Path(str(out).replace("{stem}", p.stem).replace("{frame}", _frame_name(p)).replace("{method}", method))
+                for p in depth_paths]
         if outs[0].suffix.lower() not in (".exr", ".png", ".npy", ".pfm"):
             raise ValueError(f"--out {out}: the suffix must be .exr, .png, .npy or .pfm")
     else:
         if out.suffix.lower() in SUFFIXES and not out.is_dir():
             raise ValueError(f"--out {out}: {len(depth_paths)} frames need a directory or a pattern with "
-                             f"{{stem}}, e.g. 'vo/{{stem}}.exr'")
-        outs = [out / f"{p.stem}_vo.exr" for p in depth_paths]
+                             f"{{frame}}, e.g. 'vo/{{frame}}.exr'")
+        outs = [out / f"{_frame_name(p)}_{method}.exr" for p in depth_paths]
     if len(set(outs)) != len(outs):
         raise ValueError(f"--out {out}: two frames would write the same file (frames with the same name)")
     resolved = {p.resolve() for p in depth_paths}

@@ -10,7 +10,10 @@ Formats, chosen by the file's suffix:
 
 - **OpenEXR** (``.exr``, through the ``OpenEXR`` 3.x bindings): single- or multi-part,
   single- or multi-layer. Channels are found by name, with defaults for the names Blender
-  writes (:data:`DEPTH_CHANNELS`, :data:`NORMAL_CHANNELS`); a part's channels are also
+  writes (:data:`DEPTH_CHANNELS`, :data:`NORMAL_CHANNELS`): its multilayer render result
+  (``ViewLayer.Depth.Z``, ``ViewLayer.Normal.X/Y/Z``), the compositor's File Output node in
+  multilayer (``Depth.V``, ``Normal.X/Y/Z``) and single-layer files (depth as ``R = G = B``
+  plus ``A``; normals as ``X, Y, Z`` plus ``A``: one file each). A part's channels are also
   reachable as ``"<part name>.<channel>"``.
 - **NumPy** ``.npy`` (one array: a depth (H, W), or normals (H, W, 3) as the normal file) and
   ``.npz`` (arrays ``depth`` and ``normal``), always loaded with ``allow_pickle=False``.
@@ -42,21 +45,26 @@ __all__ = ["DEPTH_CHANNELS", "NORMAL_CHANNELS", "SUFFIXES", "read_buffers", "rea
            "write_gbuffer", "read_pfm", "write_pfm", "exr_channels"]
 
 #: Depth channel names tried in order when ``depth_channel`` is not given: what Blender's
-#: compositor File Output node writes for a one-channel input named Depth (``Depth.V``), its
-#: multilayer render output (``View Layer.Depth.Z``), a plain single-layer Z, and the usual
-#: variants. Failing these, a single channel whose name ends in ``.Depth.Z`` or ``.Depth.V``
-#: (a renamed view layer) is taken.
+#: compositor File Output node writes to a multilayer file for a float input named Depth
+#: (``Depth.V``), its multilayer render output (``ViewLayer.Depth.Z``; ``View Layer`` in
+#: files of older versions), a plain single-layer Z, and the usual variants. A bare ``Z`` is
+#: not taken from a file that also has ``X`` and ``Y`` (a vector: normals). Failing these: a
+#: single channel whose name ends in ``.Depth.Z`` or ``.Depth.V`` (a renamed view layer), a
+#: bare ``V``, and the grey ``R`` of an ``R, G, B`` file whose three channels are equal
+#: everywhere (the single-layer File Output node writes a float input as ``R = G = B``, plus
+#: ``A``). Several candidates of one kind (two view layers) are an error that lists them.
 DEPTH_CHANNELS = ("Depth.V", "View Layer.Depth.Z", "ViewLayer.Depth.Z", "Z", "depth.Z", "Depth.Z",
                   "depth.V", "depth", "Depth")
 
 #: Normal channel triples tried in order when ``normal_channels`` is not given (Blender's
-#: multilayer pass, the File Output node's vector and colour inputs, a bare ``N`` layer).
+#: multilayer pass, the File Output node's vector and colour inputs, a bare ``N`` layer, and
+#: the bare ``X, Y, Z`` of the single-layer File Output node's vector input).
 #: Failing these, a single layer whose name ends in ``.Normal`` with X, Y, Z channels is taken.
 NORMAL_CHANNELS = tuple(
     tuple(f"{layer}.{axis}" for axis in axes)
     for layer in ("Normal", "View Layer.Normal", "ViewLayer.Normal", "N", "normal", "normals")
     for axes in (("X", "Y", "Z"), ("R", "G", "B"))
-)
+) + (("X", "Y", "Z"),)
 
 #: The file suffixes :func:`read_gbuffer` reads.
 SUFFIXES = (".exr", ".npy", ".npz", ".pfm", ".png")
@@ -82,7 +90,8 @@ def read_gbuffer(path_or_paths, *, camera, normal_path=None, depth_channel=None,
         The file of the normals, when they are not in the depth file (same as a pair).
     depth_channel : str, optional
         EXR channel (or NPZ array) of the depth; default: the first of
-        :data:`DEPTH_CHANNELS` present (NPZ: ``depth``).
+        :data:`DEPTH_CHANNELS` present, then its fallbacks (a single ``*.Depth.Z`` layer, a
+        bare ``V``, the grey ``R`` of ``R = G = B``); NPZ: ``depth``.
     normal_channels : str or (str, str, str), optional
         EXR channels of the normals: three names (a tuple, or one string ``"X,Y,Z"`` as on
         the command line), or a layer name such as ``"View Layer.Normal"`` (its ``.X .Y .Z``
@@ -102,14 +111,18 @@ def read_gbuffer(path_or_paths, *, camera, normal_path=None, depth_channel=None,
     Returns
     -------
     GBuffer
+        Its ``conversion`` dict also holds ``source``: the ``found`` record of
+        :func:`read_buffers` (which file and channels the depth and normals came from).
 
     Raises
     ------
     FileNotFoundError
         A file does not exist.
     ValueError
-        An unknown suffix, a missing channel (the message lists the file's channels), an array
-        of the wrong shape, a pickled object in an ``.npz``, a PNG without ``depth_scale``.
+        An unknown suffix, an unreadable (truncated) file, a missing channel or a choice the
+        defaults cannot make (two view layers, ``R, G, B`` that differ; the message lists the
+        file's channels and the argument that picks them), an array of the wrong shape, a
+        pickled object in an ``.npz``, a PNG without ``depth_scale``.
     """
     from .gbuffer import GBuffer
 
@@ -118,7 +131,9 @@ def read_gbuffer(path_or_paths, *, camera, normal_path=None, depth_channel=None,
     _check_camera(camera, depth.shape, path_or_paths)
     if found.get("normal_encoding") and "normal_encoding" not in from_arrays_kwargs:
         from_arrays_kwargs["normal_encoding"] = found["normal_encoding"]
-    return GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=depth_kind, **from_arrays_kwargs)
+    gb = GBuffer.from_arrays(depth, normal, camera=camera, depth_kind=depth_kind, **from_arrays_kwargs)
+    gb.conversion["source"] = dict(found)
+    return gb
 
 
 def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_channels=None,
@@ -134,8 +149,9 @@ def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_
     normal : (H, W, 3) ndarray of float or None
         The stored normals, or None when the files hold none (and none were asked for).
     found : dict
-        Where they came from: ``depth`` and ``normal`` (``"path:channel"``), and
-        ``normal_encoding`` ``"unit"`` for a PNG normal map.
+        Where they came from: ``depth`` and ``normal`` (``"path:channel"``, for display),
+        ``depth_channel`` and ``normal_channels`` (the EXR channel name and the three names
+        used, for an EXR), and ``normal_encoding`` ``"unit"`` for a PNG normal map.
 
     Examples
     --------
@@ -210,13 +226,17 @@ def _read_depth(path, channel, depth_scale, found, cache) -> np.ndarray:
             raise ValueError(f"depth_scale must be a finite number > 0, got {depth_scale!r}")
     if suffix == ".exr":
         channels = _exr_cached(path, cache)
-        name = channel if channel is not None else _default_depth(channels)
+        name = channel if channel is not None else _default_depth(channels, path)
         if name is None or name not in channels:
             what = (f"no depth channel {channel!r}" if channel is not None else
-                    f"no depth channel (tried {', '.join(DEPTH_CHANNELS)}, and a *.Depth.Z layer)")
+                    f"no depth channel (tried {', '.join(DEPTH_CHANNELS)}, a *.Depth.Z layer, V, and R of "
+                    f"R = G = B)")
+            if channel is None and all(c in channels for c in "XYZ"):
+                what += " (X, Y, Z is a vector: a normal file?)"
             raise ValueError(f"{path}: {what}; the file has the channels {_listing(channels)}; "
                              f"name one with depth_channel= (--depth-channel)")
         depth, where = channels[name], f"{path}:{name}"
+        found["depth_channel"] = name
     elif suffix == ".npz":
         depth, where = _npz_array(path, channel or "depth", cache), f"{path}:{channel or 'depth'}"
     elif suffix == ".npy":
@@ -257,7 +277,10 @@ def _read_normal(path, channels_arg, found, cache, *, required, same_file):
     suffix = path.suffix.lower()
     if suffix == ".exr":
         channels = _exr_cached(path, cache)
-        names = _normal_names(channels, channels_arg)
+        try:
+            names = _normal_names(channels, channels_arg)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
         if names is None:
             if not required:
                 return None
@@ -267,6 +290,7 @@ def _read_normal(path, channels_arg, found, cache, *, required, same_file):
             raise ValueError(f"{path}: {what}; the file has the channels {_listing(channels)}; name them "
                              f"with normal_channels= (--normal-channels)")
         normal, where = np.stack([channels[n] for n in names], axis=-1), f"{path}:{'/'.join(names)}"
+        found["normal_channels"] = names
     elif suffix == ".npz":
         key = channels_arg if isinstance(channels_arg, str) else "normal"
         if not required and key not in _npz_cached(path, cache).files:
@@ -298,12 +322,35 @@ def _read_normal(path, channels_arg, found, cache, *, required, same_file):
     return normal
 
 
-def _default_depth(channels) -> str | None:
+def _default_depth(channels, path) -> str | None:
+    """The depth channel of an EXR when none is named (:data:`DEPTH_CHANNELS`), or None;
+    a ValueError when the file offers several and no rule picks one."""
+    vector = "X" in channels and "Y" in channels      # bare X, Y, Z: a vector, not a depth
     for name in DEPTH_CHANNELS:
-        if name in channels:
+        if name in channels and not (name == "Z" and vector):
             return name
-    tails = [n for n in channels if n.endswith((".Depth.Z", ".Depth.V"))]
-    return tails[0] if len(tails) == 1 else None
+    tails = sorted(n for n in channels if n.endswith((".Depth.Z", ".Depth.V")))
+    if len(tails) > 1:
+        raise ValueError(f"{path}: several depth channels ({', '.join(tails)}: one per view layer?); the file "
+                         f"has the channels {_listing(channels)}; pick one with depth_channel= (--depth-channel)")
+    if tails:
+        return tails[0]
+    if "V" in channels:
+        return "V"
+    if all(c in channels for c in "RGB"):
+        r, g, b = (channels[c] for c in "RGB")
+        # the single-layer File Output node writes a float input (Depth) as R = G = B
+        if r.shape == g.shape == b.shape and _same(r, g) and _same(r, b):
+            return "R"
+        raise ValueError(f"{path}: no depth channel, and R, G, B differ (a colour image, not a depth written as "
+                         f"grey); the file has the channels {_listing(channels)}; name the depth with "
+                         f"depth_channel= (--depth-channel)")
+    return None
+
+
+def _same(a, b) -> bool:
+    """Bitwise-equal images (NaN equal to NaN)."""
+    return bool(np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
 
 
 def _normal_names(channels, spec):
@@ -312,8 +359,11 @@ def _normal_names(channels, spec):
             if all(n in channels for n in names):
                 return names
         layers = {n[: -len(".X")] for n in channels if n.endswith(".Normal.X")}
-        layers = [lay for lay in layers if all(f"{lay}.{a}" in channels for a in "YZ")]
-        return tuple(f"{layers[0]}.{a}" for a in "XYZ") if len(layers) == 1 else None
+        layers = sorted(lay for lay in layers if all(f"{lay}.{a}" in channels for a in "YZ"))
+        if len(layers) > 1:
+            raise ValueError(f"several normal layers ({', '.join(layers)}: one per view layer?); the file has the "
+                             f"channels {_listing(channels)}; pick one with normal_channels= (--normal-channels)")
+        return tuple(f"{layers[0]}.{a}" for a in "XYZ") if layers else None
     if isinstance(spec, str) and "," in spec:
         spec = tuple(c.strip() for c in spec.split(","))          # "X,Y,Z", as on the command line
     if isinstance(spec, str):
@@ -347,7 +397,17 @@ def exr_channels(path) -> dict[str, np.ndarray]:
     """Every channel of an OpenEXR file, by name, as (H, W) arrays (float16/float32/uint32).
 
     The channels of every part are listed under their own names (the first part's win a
-    clash) and also as ``"<part name>.<name>"`` for a named part.
+    clash) and also as ``"<part name>.<name>"`` for a named part, unless the name already
+    starts with the part's name (Blender's multilayer files: part ``ViewLayer.Depth`` holds
+    ``ViewLayer.Depth.Z``).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        Not a readable OpenEXR file (a truncated or damaged one, another format): the message
+        names the file.
     """
     path = Path(path)
     if not path.is_file():
@@ -363,7 +423,7 @@ def exr_channels(path) -> dict[str, np.ndarray]:
         for name, channel in part.channels.items():
             pixels = np.asarray(channel.pixels)
             out.setdefault(name, pixels)
-            if pname:
+            if pname and not name.startswith(f"{pname}."):   # Blender names its parts after the layer
                 out.setdefault(f"{pname}.{name}", pixels)
     return out
 
