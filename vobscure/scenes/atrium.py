@@ -126,7 +126,7 @@ POT_R0, POT_R1, POT_HEIGHT, POT_INSET = 0.18, 0.25, 0.5, 1.2
 #: Leaf cards: length range, width / length, elevation range (degrees), roll (degrees),
 #: height of their base above the soil and its distance from the plant's axis.
 LEAF_LENGTH, LEAF_ASPECT, LEAF_ELEVATION, LEAF_ROLL = (0.45, 0.65), 0.55, (20.0, 70.0), 20.0
-LEAF_BASE_HEIGHT, LEAF_BASE_RADIUS = 0.06, 0.03
+LEAF_BASE_HEIGHT, LEAF_BASE_RADIUS = 0.08, 0.03
 #: Alpha cutoff of the leaf cards (glTF's default alphaCutoff).
 LEAF_CUTOFF = 0.5
 #: Side of the leaf texture in texels, and supersamples per texel side (antialiased edges).
