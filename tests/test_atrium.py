@@ -371,3 +371,21 @@ def test_scene_is_a_trimesh_scene_of_its_meshes(scene):
     # the concatenated mesh keeps every triangle (no vertex merging across parts)
     assert isinstance(scene.mesh, trimesh.Trimesh)
     assert len(scene.mesh.faces) == len(scene.triangles)
+
+
+def test_docs_pictures_script_runs(tmp_path):
+    """docs/scenes_pictures.py (the pictures of docs/scenes.md) runs in its quick mode and
+    records every built-in scene and both atrium views."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "docs" / "scenes_pictures.py"
+    spec = importlib.util.spec_from_file_location("scenes_pictures", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    written = module.make(tmp_path, quick=True)
+    assert [p.name for p in written] == ["builtin.png", "atrium.png", "provenance.json"]
+    record = json.loads((tmp_path / "provenance.json").read_text())
+    assert set(record["scenes"]) == set(names()) | {"atrium/arcade", "atrium/gallery"}
+    assert record["scenes"]["atrium/arcade"]["coverage"] >= MIN_COVERAGE
