@@ -55,7 +55,8 @@ def make(out_dir, quick: bool = False) -> list[Path]:
     scale = 2 if quick else 1
     rays = RAYS // (scale * scale)
     tile = (TILE[0] // scale, TILE[1] // scale)
-    record = {"generator": "docs/scenes_pictures.py", "quantity": "ao (cosine, within the radius) x |view-space normal z|",
+    record = {"generator": "docs/scenes_pictures.py",
+              "quantity": "ao (cosine, within the radius) x |view-space normal z|",
               "rays": rays, "seed": SEED, "quick": quick, "scenes": {}}
 
     names = vo.scenes.names()

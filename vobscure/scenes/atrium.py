@@ -405,8 +405,8 @@ def atrium(*, size=(20.0, 12.0), storey_height: float = 4.0, bays=(8, 5), arcade
     Returns
     -------
     Scene
-        The meshes of :mod:`vobscure.scenes.atrium`; about 36 000 triangles with the
-        defaults. ``scene.view`` is the default camera: in the south arcade at eye height
+        The meshes of :mod:`vobscure.scenes.atrium`; 41 324 triangles with the
+        defaults, 23 040 of them the chains' links. ``scene.view`` is the default camera: in the south arcade at eye height
         (1.6 m), looking along the long axis (+x) and across the courtyard.
 
     Raises
@@ -507,8 +507,9 @@ def atrium(*, size=(20.0, 12.0), storey_height: float = 4.0, bays=(8, 5), arcade
     for line, stations, swap in ((0.5 * W, xs, False), (0.5 * L, zs, True)):
         for c in (-line, line):
             for a, b in zip(stations[:-1], stations[1:]):
-                pieces = [_box((a + PLINTH_HALF, H, c - PARAPET_HALF), (b - PLINTH_HALF, y1, c + PARAPET_HALF)),
-                          _box((a + PLINTH_HALF, y1, c - COPING_HALF), (b - PLINTH_HALF, y2, c + COPING_HALF))]
+                a1, b1 = a + PLINTH_HALF, b - PLINTH_HALF
+                pieces = [_box((a1, H, c - PARAPET_HALF), (b1, y1, c + PARAPET_HALF)),
+                          _box((a1, y1, c - COPING_HALF), (b1, y2, c + COPING_HALF))]
                 parapets += [_swap_xz(p) for p in pieces] if swap else pieces
 
     # chains with lanterns from the crowns of the odd ground-floor bays of the long sides
