@@ -36,6 +36,8 @@ FLOAT32_RTOL = 1e-6
 ALL_BUILDERS = ["blob", "cornell_box", "crease", "groove", "slab", "sphere_on_plane", "steps"]
 #: The registered vegetation scenes (open foliage; tested in test_vegetation.py).
 VEGETATION = ["grass", "leaf_cloud", "leaf_cloud_dense", "tree", "tree_poplar"]
+#: The registered interior (open banners, alpha-tested leaves; tested in test_atrium.py).
+INTERIORS = ["atrium"]
 MESH_DIR = Path(__file__).resolve().parents[2] / "shared/data/meshes"
 
 
@@ -411,7 +413,7 @@ def test_blob_zero_amplitude_is_a_unit_sphere():
 # --------------------------------------------------------------------------------------
 
 def test_registry_names_and_get():
-    assert names() == sorted(ALL_BUILDERS + VEGETATION)
+    assert names() == sorted(ALL_BUILDERS + VEGETATION + INTERIORS)
     assert get("groove", angle=45.0, depth=1.0).meshes["groove"].volume == pytest.approx(
         groove(45.0, depth=1.0).meshes["groove"].volume)
     assert get("crease", length=2.0).bounds[1, 0] == 2.0

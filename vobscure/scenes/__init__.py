@@ -1,9 +1,11 @@
 """Scenes: named triangle meshes, procedural builders, file loading, and the one resolver
 (:func:`as_scene`, :func:`resolve`) of a scene argument; vegetation scenes (leaf clouds, trees,
-grass) with open, two-sided foliage in :mod:`vobscure.scenes.vegetation`."""
+grass) with open, two-sided foliage in :mod:`vobscure.scenes.vegetation`; an interior with
+alpha-tested foliage, :func:`atrium`, in :mod:`vobscure.scenes.atrium`."""
 
 from . import _alpha, _resolve, _scene, procedural, vegetation
 from ._alpha import AlphaMask
+from .atrium import atrium
 from ._resolve import as_scene, check_spec, resolve
 from ._scene import Scene
 from .io import DegenerateFacesWarning, load
@@ -19,4 +21,5 @@ __all__ = [
     "DegenerateFacesWarning",
     *procedural.__all__,
     *vegetation.__all__,
+    "atrium",
 ]

@@ -22,6 +22,7 @@ import trimesh
 
 from .._validate import as_rng, check_int, check_positive
 from ._scene import Scene
+from .atrium import atrium
 from .vegetation import grass, leaf_cloud, leaf_cloud_dense, tree, tree_poplar
 
 __all__ = [
@@ -583,20 +584,23 @@ _BUILDERS = {
     "leaf_cloud_dense": leaf_cloud_dense,
     "tree": tree,
     "tree_poplar": tree_poplar,
+    # the interior (open banners and alpha-tested leaf cards; vobscure.scenes.atrium)
+    "atrium": atrium,
 }
 
 
 def names() -> list[str]:
     """Sorted names of the procedural scenes that :func:`get` builds: the closed solids of
-    this module and the vegetation scenes of :mod:`vobscure.scenes.vegetation` (``grass``,
-    ``leaf_cloud``, ``leaf_cloud_dense``, ``tree``, ``tree_poplar``), whose foliage is open.
+    this module, the vegetation scenes of :mod:`vobscure.scenes.vegetation` (``grass``,
+    ``leaf_cloud``, ``leaf_cloud_dense``, ``tree``, ``tree_poplar``), whose foliage is open,
+    and the interior of :mod:`vobscure.scenes.atrium` (``atrium``).
 
     Examples
     --------
     >>> from vobscure.scenes import names
     >>> names()  # doctest: +NORMALIZE_WHITESPACE
-    ['blob', 'cornell_box', 'crease', 'grass', 'groove', 'leaf_cloud', 'leaf_cloud_dense', 'slab',
-     'sphere_on_plane', 'steps', 'tree', 'tree_poplar']
+    ['atrium', 'blob', 'cornell_box', 'crease', 'grass', 'groove', 'leaf_cloud', 'leaf_cloud_dense',
+     'slab', 'sphere_on_plane', 'steps', 'tree', 'tree_poplar']
     """
     return sorted(_BUILDERS)
 
