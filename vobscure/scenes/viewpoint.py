@@ -195,13 +195,17 @@ def _probe(scene, point) -> tuple[float, float]:
 
 
 def _first_hit(scene, origin, direction):
-    """(point, distance) of the first hit of one ray, or (None, inf)."""
-    hits = scene.tracer.intersect(np.asarray(origin, dtype=np.float64)[None],
-                                  np.asarray(direction, dtype=np.float64)[None])
-    if hits.primitive[0] < 0:
+    """(point, distance) of the first hit of one ray, or (None, inf); the point is moved onto
+    its triangle's plane (as the G-buffer does), which removes Embree's float32 error across it."""
+    o, d = np.asarray(origin, dtype=np.float64), np.asarray(direction, dtype=np.float64)
+    hits = scene.tracer.intersect(o[None], d[None])
+    prim = int(hits.primitive[0])
+    if prim < 0:
         return None, math.inf
-    t = float(hits.distance[0])
-    return np.asarray(origin, dtype=np.float64) + t * np.asarray(direction, dtype=np.float64), t
+    n = scene.face_normals[prim]
+    p = o + float(hits.distance[0]) * d
+    p = p - (float(np.dot(n, p)) - float(scene.plane_offsets[prim])) * n
+    return p, float(np.dot(p - o, d))
 
 
 def _inside_views(scene) -> list[dict]:
@@ -220,9 +224,8 @@ def _inside_views(scene) -> list[dict]:
         floor, _ = _first_hit(scene, p, (0.0, -1.0, 0.0))
         if floor is None:
             continue
-        ceiling, clear = _first_hit(scene, floor + [0.0, eps, 0.0], (0.0, 1.0, 0.0))
-        if ceiling is None:
-            clear = hi[1] - floor[1]
+        ceiling, _ = _first_hit(scene, floor + [0.0, eps, 0.0], (0.0, 1.0, 0.0))
+        clear = (ceiling[1] if ceiling is not None else hi[1]) - floor[1]
         if not clear > 2 * eps:        # the probe lies on a surface with nothing above it
             continue
         height = min(EYE_HEIGHT_M, 0.5 * clear) if metres else EYE_HEIGHT_FRACTION * clear
