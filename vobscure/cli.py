@@ -204,7 +204,8 @@ def _compare_main(args) -> int:
     elif args.normal is not None:
         raise ValueError("--normal goes with --gbuffer (your own frame)")
     else:
-        camera = _camera_arg(args.camera, size) if args.camera else _view_camera(args, size, args.scene)
+        camera = _view_camera(args, size, args.scene)
+        camera = _camera_arg(args.camera, size) if camera is None and args.camera else camera
     result = compare(scene, name=name, camera=camera, size=size, radii=args.radius,
                      methods=args.methods, normal_clamp=args.normals, thickness=args.thickness,
                      references=tuple(args.reference) if args.reference else None,
