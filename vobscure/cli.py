@@ -41,7 +41,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quantity", choices=QUANTITIES, default="ao",
                    help="what to compute: a quantity of vobscure.ground_truth (default ao)")
     r.add_argument("--radius", type=float, default=None,
-                   help="AO ray length / obscurance distance / VO ball radius (default 0.1 x the scene extent)")
+                   help="AO ray length / obscurance distance / VO ball radius (default 0.5 m in a file that "
+                        "declares metres, else 0.1 x the scene extent)")
     _view_options(r)
     r.add_argument("--fov", type=float, default=None, metavar="DEG",
                    help="vertical field of view in degrees (default the scene's view's)")
@@ -79,7 +80,9 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--size", nargs=2, type=int, metavar=("W", "H"), default=None,
                    help="image size (default 256 256; 64 64 with --quick)")
     c.add_argument("--radius", type=float, nargs="+", default=None,
-                   help="one or more ball radii (default 0.1 x the scene extent)")
+                   help="one or more ball radii in scene units (default 0.5 m in a file that declares metres, "
+                        "else 0.1 x the scene extent; capped so the ball projects under a quarter of the image "
+                        "height on 95%% of the covered pixels)")
     c.add_argument("--methods", default=None,
                    help="comma-separated NAME[:SAMPLES[:FETCH]] with NAME one of "
                         f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1, plus the vegetation models on a "
