@@ -4,8 +4,9 @@ verdict prints.
 
 :func:`suggest_view` renders candidate views at a tiny size and keeps the one that covers
 most of the image and is least one plane. Candidates are views from outside the bounding
-sphere (several azimuths and elevations, each as close as keeps the scene in the frame) and, when the scene is enclosed (rays from a probe
-point inside its bounding box hit front faces in nearly every direction: a room, an atrium),
+sphere (several azimuths and elevations, each as close as keeps the scene in the frame, and
+closer) and, when the scene is enclosed (rays from a probe point inside its bounding box hit
+front faces in nearly every direction: a room, an atrium),
 only views from inside, at a standing height above the floor found by a downward ray. A built
 scene keeps the view it was made with; :attr:`Scene.view <vobscure.scenes.Scene.view>` calls
 :func:`suggest_view` only for a scene without one, once.
@@ -52,6 +53,9 @@ OUTSIDE_AZIMUTHS = tuple(range(0, 360, 45))
 OUTSIDE_ELEVATIONS = (20.0, 45.0)
 #: Outside views keep the scene this much inside the frame (5 % margin).
 FIT_MARGIN = 1.05
+#: Each outside view also comes closer, to these fractions of its fitting distance: a view
+#: that crops a large, flat scene (a game level seen from above) covers more of the image.
+OUTSIDE_CLOSER = (1.0, 0.6)
 #: Vertices used to fit an outside view (every k-th of the triangles' corners).
 _FIT_POINTS = 100_000
 #: Horizontal directions (degrees) and downward pitch (degrees) of the inside views.
@@ -102,7 +106,8 @@ def suggest_view(scene, *, size=SUGGEST_SIZE) -> dict:
     Notes
     -----
     Every candidate is traced at ``size`` (one ray per pixel) and scored by coverage times
-    (1 - the fraction of its hits on the dominant plane); ties go to the larger coverage.
+    (1 - the fraction of its hits on the dominant plane) times (1 - the fraction of its hits
+    on back faces); ties go to the larger coverage.
     When a probe point (the bounding box's centre, or one of four points halfway to its
     sides at the centre's height) sees front faces in at least :data:`ENCLOSED_HITS` of its
     directions, the scene is enclosed and only inside views compete: from above each such
@@ -133,7 +138,8 @@ def suggest_view(scene, *, size=SUGGEST_SIZE) -> dict:
     best, best_key = None, None
     for view in candidates:
         d = _trace_diagnostics(scene, view, (W, H))
-        score = d["coverage"] * (1.0 - d["plane_fraction"]) if d["coverage"] > 0 else -1.0
+        score = (d["coverage"] * (1.0 - d["plane_fraction"]) * (1.0 - d["back_faces"])
+                 if d["coverage"] > 0 else -1.0)
         key = (round(score, 12), d["coverage"])
         if best_key is None or key > best_key:
             best, best_key = view, key
@@ -150,7 +156,8 @@ def _view(eye, target, fov_y) -> dict:
 def _outside_views(scene) -> list[dict]:
     """Views from outside, each as close as keeps every vertex inside the central square of
     the image (so any aspect ratio of 1 or wider shows the whole scene), at most as far as
-    the library's default that frames the bounding sphere; that default (+z) first."""
+    the library's default that frames the bounding sphere, and closer by :data:`OUTSIDE_CLOSER`;
+    that default (+z) first."""
     centre = np.asarray(scene.center, dtype=np.float64)
     frame = 0.5 * float(scene.extent) / math.sin(math.radians(OUTSIDE_FOV_Y) / 2)
     views = [_view(centre + np.array([0.0, 0.0, FIT_MARGIN * frame]), centre, OUTSIDE_FOV_Y)]
@@ -168,7 +175,7 @@ def _outside_views(scene) -> list[dict]:
             # D - q.back and inside the square when |q.right|, |q.up| <= tan_half x depth
             reach = np.maximum(np.abs(points @ right), np.abs(points @ up)) / tan_half + points @ back
             distance = min(FIT_MARGIN * float(reach.max()), FIT_MARGIN * frame)
-            views.append(_view(centre + distance * back, centre, OUTSIDE_FOV_Y))
+            views += [_view(centre + factor * distance * back, centre, OUTSIDE_FOV_Y) for factor in OUTSIDE_CLOSER]
     return views
 
 
