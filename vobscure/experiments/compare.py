@@ -347,12 +347,12 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         thickness_trials = _thickness_trials(rows, images, all_refs, gb, normal_clamp=normal_clamp,
                                              seed=seed, repeats=repeats)
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
-    summary["text"] += [radius_choice.sentence()] if radius_choice is not None else []
     if frame:
         summary["text"].insert(0, "A G-buffer without its scene: the converged screen-space VO is the only "
                                   "reference possible (nothing can be ray cast), so these errors are the "
                                   "estimators' sampling errors; what the screen-space model itself misses "
                                   "(thickness, hidden and off-screen geometry) cannot be measured here.")
+    summary["text"] += [radius_choice.sentence()] if radius_choice is not None else []
 
     provenance = dict(
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),
