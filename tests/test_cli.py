@@ -131,3 +131,65 @@ def test_camera_takes_negative_coordinates_as_written(tmp_path):
 def test_camera_with_a_negative_first_number_and_too_few_values_is_a_clean_error(tmp_path, capsys):
     assert cli.main(["compare", "--camera", "-1,2,3", "--out", str(tmp_path)]) == 2
     assert "6 or 7 numbers" in capsys.readouterr().err
+
+
+def _compare_slab(tmp_path, *view):
+    return cli.main(["compare", "--scene", "slab", "--size", "16", "12", *view, "--methods", "line:5",
+                     "--reference", "screen", "--quick", "--out", str(tmp_path / "out"),
+                     "--cache", str(tmp_path / "cache")])
+
+
+def test_eye_target_fov_take_negative_numbers_as_written(tmp_path, capsys):
+    """``--eye -1.5 2 -1e-1`` (plain and exponent negatives) is the eye; the run records the
+    camera and how the default radius was chosen, and prints it."""
+    status = _compare_slab(tmp_path, "--eye", "-1.5", "2", "-1e-1", "--target", "0", "-0.25", "0", "--fov", "40")
+    assert status == 0
+    prov = json.loads((tmp_path / "out" / "provenance.json").read_text())
+    assert prov["camera"]["eye"] == [-1.5, 2.0, -0.1] and prov["camera"]["target"] == [0.0, -0.25, 0.0]
+    assert prov["camera"]["fov_y"] == 40.0
+    rule = prov["radius_rule"]
+    assert rule["radius"] == prov["radii"][0] and rule["rule"] in ("extent", "extent+cap")
+    assert rule["sentence"] in capsys.readouterr().out
+
+
+def test_fov_alone_keeps_the_scenes_eye_and_target(tmp_path):
+    assert _compare_slab(tmp_path, "--fov", "30", "--radius", "0.2") == 0
+    prov = json.loads((tmp_path / "out" / "provenance.json").read_text())
+    view = vo.scenes.slab().view
+    assert prov["camera"]["eye"] == list(view["eye"]) and prov["camera"]["fov_y"] == 30.0
+    assert prov["radius_rule"] is None and prov["radii"] == [0.2]       # --radius given: no rule
+
+
+def test_render_takes_eye_target_up(tmp_path):
+    status = cli.main(["render", "--scene", "slab", "--size", "12", "8", "--rays", "4", "--eye", "-2", "3", "-2",
+                       "--target", "0", "0", "0", "--up", "0", "1", "0", "--fov", "35", "--out", str(tmp_path),
+                       "--quiet"])
+    assert status == 0
+    with np.load(tmp_path / "slab_ao.npz") as data:
+        prov = json.loads(str(data["provenance"]))
+    assert prov["camera"]["eye"] == [-2.0, 3.0, -2.0] and prov["camera"]["fov_y"] == 35.0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--eye", "0", "0", "0", "--target", "0", "0", "0"], "eye and target must be distinct"),
+    (["--fov", "180"], "--fov must be a vertical field of view in degrees in (0, 180)"),
+    (["--eye", "nan", "1", "1"], "--eye must be three finite numbers"),
+    (["--camera", "1,2,3,0,0,0", "--eye", "1", "2", "3"], "either as --camera or as --eye"),
+])
+def test_bad_view_options_are_clean_errors(tmp_path, capsys, args, message):
+    assert _compare_slab(tmp_path, *args) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_eye_with_too_few_numbers_is_an_argparse_error(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        _compare_slab(tmp_path, "--eye", "-1", "2", "--target", "0", "0", "0")
+    assert exc.value.code == 2 and "--eye: expected 3 arguments" in capsys.readouterr().err
+
+
+def test_gbuffer_with_eye_is_a_clean_error(tmp_path, capsys):
+    path = tmp_path / "depth.npy"
+    np.save(path, np.ones((4, 4)))
+    assert cli.main(["compare", "--gbuffer", str(path), "--fov", "40", "--eye", "0", "0", "1",
+                     "--out", str(tmp_path)]) == 2
+    assert "--gbuffer brings its own view" in capsys.readouterr().err

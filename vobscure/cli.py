@@ -42,7 +42,11 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quantity", choices=QUANTITIES, default="ao",
                    help="what to compute: a quantity of vobscure.ground_truth (default ao)")
     r.add_argument("--radius", type=float, default=None,
-                   help="AO ray length / obscurance distance / VO ball radius (default 0.1 x the scene extent)")
+                   help="AO ray length / obscurance distance / VO ball radius (default 0.5 m in a file that "
+                        "declares metres, else 0.1 x the scene extent)")
+    _view_options(r)
+    r.add_argument("--fov", type=float, default=None, metavar="DEG",
+                   help="vertical field of view in degrees (default the scene's view's)")
     r.add_argument("--rays", type=int, default=256, help="rays per pixel for ao/obscurance (default 256)")
     r.add_argument("--samples", type=int, default=1024, help="points per ball for volumetric (default 1024)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -73,10 +77,13 @@ def _parser() -> argparse.ArgumentParser:
                         "under 'your own frame'); the only reference is then the converged screen-space VO")
     c.add_argument("--camera", default=None, metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
                    help="eye and target (and vertical field of view in degrees); default the scene's camera")
+    _view_options(c, fov_note=True)
     c.add_argument("--size", nargs=2, type=int, metavar=("W", "H"), default=None,
                    help="image size (default 256 256; 64 64 with --quick)")
     c.add_argument("--radius", type=float, nargs="+", default=None,
-                   help="one or more ball radii (default 0.1 x the scene extent)")
+                   help="one or more ball radii in scene units (default 0.5 m in a file that declares metres, "
+                        "else 0.1 x the scene extent; capped so the ball projects under a quarter of the image "
+                        "height on 95%% of the covered pixels)")
     c.add_argument("--methods", default=None,
                    help="comma-separated NAME[:SAMPLES[:FETCH]] with NAME one of "
                         f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1, plus the vegetation models on a "
@@ -129,6 +136,49 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _view_options(p, *, fov_note: bool = False) -> None:
+    """--eye, --target, --up: the camera's pose, each overriding the scene's view."""
+    fov = (" and --fov DEG (vertical field of view; with --gbuffer it is the frame's lens instead)"
+           if fov_note else "")
+    for name, what in (("--eye", "camera position"), ("--target", "point looked at"),
+                       ("--up", "up direction hint (default the scene's view's, usually 0 1 0)")):
+        p.add_argument(name, type=float, nargs=3, default=None, metavar=("X", "Y", "Z"),
+                       help=f"{what} in scene units, negative numbers as written (-14 2 0); "
+                            f"default the scene's view's{fov if name == '--eye' else ''}")
+
+
+def _view_camera(args, size, scene_spec):
+    """The camera of --eye/--target/--up/--fov, each overriding the scene's view (resolved only
+    when --eye or --target is missing), or None when none is given."""
+    from .camera import Camera
+
+    given = {k: getattr(args, k, None) for k in ("eye", "target", "up", "fov")}
+    if all(v is None for v in given.values()):
+        return None
+    if getattr(args, "camera", None):
+        raise ValueError("give the view either as --camera or as --eye/--target/--up/--fov, not both")
+    for key in ("eye", "target", "up"):
+        if given[key] is not None and not np.all(np.isfinite(given[key])):
+            raise ValueError(f"--{key} must be three finite numbers, got {' '.join(map(str, given[key]))}")
+    if given["fov"] is not None and not 0.0 < given["fov"] < 180.0:
+        raise ValueError(f"--fov must be a vertical field of view in degrees in (0, 180), got {given['fov']}")
+    view = {}
+    if given["eye"] is None or given["target"] is None:
+        from .scenes import resolve
+
+        view = resolve(scene_spec)[0].view
+    eye = given["eye"] if given["eye"] is not None else view["eye"]
+    target = given["target"] if given["target"] is not None else view["target"]
+    up = given["up"] if given["up"] is not None else view.get("up", (0.0, 1.0, 0.0))
+    lens = ({"fov_y": given["fov"]} if given["fov"] is not None
+            else {"fov_y": view.get("fov_y"), "ortho_height": view.get("ortho_height")} if view
+            else {"fov_y": 45.0})
+    try:
+        return Camera.look_at(eye, target, up, size=tuple(size), **lens)
+    except ValueError as exc:
+        raise ValueError(f"--eye/--target/--up: {exc}") from exc
+
+
 def _camera_arg(spec: str, size):
     from .camera import Camera
 
@@ -147,13 +197,12 @@ def _compare_main(args) -> int:
     from .experiments.compare import DEFAULT_SIZE, QUICK_SIZE, compare, report_text
 
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else DEFAULT_SIZE)
-    camera = _camera_arg(args.camera, size) if args.camera else None
     cache = False if args.no_cache else (args.cache if args.cache is not None else True)
     scene, name = args.scene, None
     if args.gbuffer is not None:
-        if args.camera or args.size:
+        if args.camera or args.size or args.eye or args.target or args.up:
             raise ValueError("--gbuffer brings its own view: give its camera with --fov, --intrinsics or "
-                             "--projection, not --camera or --size")
+                             "--projection, not --camera, --eye, --target, --up or --size")
         path = Path(args.gbuffer)
         if not path.is_file():
             raise FileNotFoundError(f"--gbuffer: no such file: {path}")
@@ -161,6 +210,9 @@ def _compare_main(args) -> int:
         name, size, camera = path.stem, None, None
     elif args.normal is not None:
         raise ValueError("--normal goes with --gbuffer (your own frame)")
+    else:
+        camera = _view_camera(args, size, args.scene)
+        camera = _camera_arg(args.camera, size) if camera is None and args.camera else camera
     result = compare(scene, name=name, camera=camera, size=size, radii=args.radius,
                      methods=args.methods, normal_clamp=args.normals, thickness=args.thickness,
                      references=tuple(args.reference) if args.reference else None,
@@ -572,8 +624,9 @@ def _estimate_outputs(out: Path, depth_paths, method: str) -> list[Path]:
 
 def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao", radius=None,
            rays: int = 256, samples: int = 1024, seed: int = 0, threads=None,
-           out=Path("vobscure-out"), progress: bool = True, allow_open: bool = False) -> dict:
-    """Run the render job; returns the provenance record (also stored in the ``.npz``)."""
+           out=Path("vobscure-out"), progress: bool = True, allow_open: bool = False, camera=None) -> dict:
+    """Run the render job; returns the provenance record (also stored in the ``.npz``).
+    ``camera`` (a :class:`~vobscure.Camera` of ``size``) replaces the scene's view."""
     from . import __version__
     from ._io import save_npz
     from .experiments.common import default_radius
@@ -583,7 +636,7 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
 
     t0 = time.perf_counter()
     sc, scene_spec = resolve(scene)
-    cam = sc.camera(tuple(size))
+    cam = sc.camera(tuple(size)) if camera is None else camera
     if radius is None:
         radius = default_radius(sc)
     gb = render_gbuffer(sc, cam)
@@ -669,11 +722,36 @@ def _joined_list_values(argv: list[str]) -> list[str]:
     return out
 
 
+#: Options followed by this many numbers, which may be negative as written (``--eye -14 2 0``,
+#: ``--fov 4e1``): argparse takes a value that starts with a minus sign for an option unless it
+#: is a plain negative number (``-14``, ``-.5``), so each number of these options is passed on
+#: with a leading space (``float`` ignores it, argparse then reads it as a value).
+NUMBER_OPTIONS = {"--eye": 3, "--target": 3, "--up": 3, "--fov": 1}
+
+
+def _numbers_as_written(argv: list[str]) -> list[str]:
+    """``argv`` with the numbers after each :data:`NUMBER_OPTIONS` option marked as values."""
+    out = list(argv)
+    i = 0
+    while i < len(out):
+        count = NUMBER_OPTIONS.get(out[i], 0)
+        i += 1
+        while count and i < len(out):
+            try:
+                float(out[i])
+            except ValueError:
+                break
+            if out[i].startswith("-"):
+                out[i] = " " + out[i]
+            i, count = i + 1, count - 1
+    return out
+
+
 def main(argv=None) -> int:
     """Entry point of the ``vobscure`` command; returns the exit status."""
     parser = _parser()
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
-    args = parser.parse_args(_joined_list_values(argv))
+    args = parser.parse_args(_numbers_as_written(_joined_list_values(argv)))
     if args.command is None:
         parser.print_help()
         return 0
@@ -699,7 +777,8 @@ def main(argv=None) -> int:
     try:
         record = render(scene=args.scene, size=args.size, quantity=args.quantity, radius=args.radius,
                         rays=args.rays, samples=args.samples, seed=args.seed, threads=args.threads,
-                        out=args.out, progress=not args.quiet, allow_open=args.allow_open)
+                        out=args.out, progress=not args.quiet, allow_open=args.allow_open,
+                        camera=_view_camera(args, args.size, args.scene))
     except (ValueError, FileNotFoundError) as exc:
         print(f"vobscure render: error: {exc}", file=sys.stderr)
         return 2

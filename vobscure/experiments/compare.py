@@ -39,7 +39,7 @@ import numpy as np
 from .. import methods as _methods
 from .. import references as _references
 from .._validate import check_choice, check_int, check_positive
-from .common import (default_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
+from .common import (choose_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
                      write_text)
 from .sweeps import REFERENCES, InlineExecutor, SweepConfig, sweep
 
@@ -377,8 +377,12 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     elif camera is None:
         size = tuple(size) if size is not None else (QUICK_SIZE if quick else DEFAULT_SIZE)
         camera = sc.camera(size)
-    if radii is None:
-        radii = (default_radius(sc),)
+    radius_choice = None
+    if radii is None:   # the rule, capped for this camera's view (a frame is its own view)
+        from ..render import render_gbuffer
+
+        radius_choice = choose_radius(sc, sc if frame else render_gbuffer(sc, camera))
+        radii = (radius_choice.radius,)
     radii = tuple(check_positive(r, "radius") for r in np.atleast_1d(radii))
     store = _as_cache(cache)
     out = Path(out) if out is not None else Path("vobscure-out") / f"compare-{scene_name}"
@@ -418,9 +422,11 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                                   "reference possible (nothing can be ray cast), so these errors are the "
                                   "estimators' sampling errors; what the screen-space model itself misses "
                                   "(thickness, hidden and off-screen geometry) cannot be measured here.")
+    summary["text"] += [radius_choice.sentence()] if radius_choice is not None else []
 
     provenance = dict(
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),
+        radius_rule=radius_choice.to_dict() if radius_choice is not None else None,
         methods=[c.label for c in configs], normal_clamp=bool(normal_clamp), thickness=thickness,
         references=list(references), missing_references=dict(missing), allow_open=allow_open,
         shell_thickness=({f"{r:g}": (thickness if thickness is not None else _references.SHELL_THICKNESS * r)

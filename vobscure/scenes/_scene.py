@@ -24,8 +24,8 @@ class Scene:
         A label used in provenance records and figure titles.
     view : dict, optional
         A suggested camera: keys ``eye``, ``target``, ``up`` and either ``fov_y`` or
-        ``ortho_height``. When absent, a view from the +z side that frames the bounding
-        sphere is suggested.
+        ``ortho_height``. When absent, :func:`~vobscure.scenes.viewpoint.suggest_view`
+        chooses one (from inside an enclosed scene), once.
     smooth_angle : float or mapping of str to float, optional
         Crease angle in degrees for the shading normals, per mesh or for all: a triangle
         corner's normal is the area-weighted mean of the normals of the faces around that
@@ -149,10 +149,14 @@ class Scene:
         """The suggested camera parameters (eye, target, up, fov_y or ortho_height)."""
         if self._view is not None:
             return dict(self._view)
-        radius = 0.5 * self.extent
-        distance = radius / np.sin(np.radians(45.0) / 2) * 1.05
-        return {"eye": tuple(self.center + np.array([0.0, 0.0, distance])),
-                "target": tuple(self.center), "up": (0.0, 1.0, 0.0), "fov_y": 45.0}
+        return dict(self._suggested_view)
+
+    @cached_property
+    def _suggested_view(self) -> dict:
+        """:func:`~vobscure.scenes.viewpoint.suggest_view` of a scene without a view, once."""
+        from .viewpoint import suggest_view
+
+        return suggest_view(self)
 
     def camera(self, size=(256, 256)):
         """The suggested :class:`~vobscure.Camera` at the given (width, height)."""

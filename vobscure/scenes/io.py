@@ -11,6 +11,7 @@ import numpy as np
 import trimesh
 
 from ._scene import Scene
+from .viewpoint import file_view
 
 __all__ = ["load", "DegenerateFacesWarning", "SUPPORTED_EXTENSIONS"]
 
@@ -142,7 +143,7 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
     if not meshes:
         raise ValueError(f"{path} holds no triangles with a non-zero area")
     return Scene(meshes, name=name if name is not None else path.stem,
-                 smooth_angle=float(smooth_angle))
+                 smooth_angle=float(smooth_angle), **file_view(path, meshes))
 
 
 def _parts(loaded, stem: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
