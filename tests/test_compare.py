@@ -294,3 +294,17 @@ def test_compare_refuses_a_view_that_sees_nothing():
     away = vo.Camera.look_at((0, 0, 20), (0, 0, 40), size=(8, 8), fov_y=40)
     with pytest.raises(ValueError, match="sees none of 'slab'"):
         vo.experiments.compare.compare("slab", camera=away, methods="line:5", quick=True, cache=False, write=False)
+
+
+def test_a_view_of_one_flat_wall_is_warned_about_in_the_verdict():
+    # the slab from straight above sees its top face only: one plane, one depth
+    down = vo.Camera.look_at((0, 5, 0), (0, 0, 0), (0, 0, -1), size=(12, 12), ortho_height=2.0)
+    res = vo.experiments.compare.compare("slab", camera=down, methods="line:5", quick=True, cache=False,
+                                         write=False, radii=0.3)
+    warnings = res.summary["view_warnings"]
+    assert any("one plane" in w for w in warnings)
+    assert res.summary["text"][:len(warnings)] == warnings          # said first
+    assert res.provenance["view"]["coverage"] == 1.0 and res.provenance["view"]["chosen_by"] == "the caller"
+    good = vo.experiments.compare.compare("cornell_box", size=(24, 24), methods="line:5", quick=True, cache=False,
+                                          write=False, radii=0.3)
+    assert good.summary["view_warnings"] == [] and good.provenance["view"]["chosen_by"] == "the scene's own view"

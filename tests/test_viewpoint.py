@@ -52,9 +52,11 @@ def _assert_cap_holds(scene, view, size):
 def test_default_radius_projects_under_a_quarter_of_the_image_for_every_builtin_view(name):
     scene = vo.scenes.get(name)
     choice, _ = _assert_cap_holds(scene, scene.view, (64, 48))
-    # without units the rule is a tenth of the extent, lowered only by the cap
-    assert choice.base == pytest.approx(0.1 * scene.extent, rel=1e-12)
-    assert choice.rule in ("extent", "extent+cap")
+    if scene.metadata.get("units") == "m":   # a scene in metres (the atrium) starts from 0.5 m
+        assert choice.base == RADIUS_METRES and choice.rule in ("metres", "metres+cap")
+    else:   # without units the rule is a tenth of the extent, lowered only by the cap
+        assert choice.base == pytest.approx(0.1 * scene.extent, rel=1e-12)
+        assert choice.rule in ("extent", "extent+cap")
 
 
 def test_cap_inside_the_cornell_box_and_one_pixel_by_hand():

@@ -372,16 +372,27 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         repeats, rays = 1, min(rays, 64)
         volume_samples, screen_samples = min(volume_samples, 256), min(screen_samples, 512)
         orbit = min(orbit, 4) if orbit else 0
+    camera_given = camera is not None
     if frame:
         camera = sc.camera
     elif camera is None:
         size = tuple(size) if size is not None else (QUICK_SIZE if quick else DEFAULT_SIZE)
         camera = sc.camera(size)
-    radius_choice = None
-    if radii is None:   # the rule, capped for this camera's view (a frame is its own view)
-        from ..render import render_gbuffer
+    from ..render import render_gbuffer
+    from ..scenes.viewpoint import view_diagnostics, view_warnings
 
-        radius_choice = choose_radius(sc, sc if frame else render_gbuffer(sc, camera))
+    view_gb = sc if frame else render_gbuffer(sc, camera)     # a frame is its own view
+    if not view_gb.valid.any():
+        raise ValueError(f"the camera sees none of {scene_name!r}: no pixel of the {camera.width} x {camera.height} "
+                         f"image is covered, so there is nothing to score; aim it at the scene (--eye, --target, "
+                         f"--camera, or leave the default view)")
+    view_facts = view_diagnostics(view_gb, scene=None if frame else sc)
+    view_facts["chosen_by"] = ("the frame" if frame else "the caller" if camera_given
+                               else "the scene's own view" if getattr(sc, "_view", None) is not None
+                               else "vobscure.scenes.viewpoint.suggest_view (the scene holds no camera)")
+    radius_choice = None
+    if radii is None:   # the rule, capped for this camera's view
+        radius_choice = choose_radius(sc, view_gb)
         radii = (radius_choice.radius,)
     radii = tuple(check_positive(r, "radius") for r in np.atleast_1d(radii))
     store = _as_cache(cache)
@@ -402,10 +413,6 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         all_refs.setdefault(res.radius, {k: v.value for k, v in res.references.items()})
         hits.setdefault(res.radius, res.cache_hits)
     gb = results[0].gbuffer
-    if not gb.valid.any():
-        raise ValueError(f"the camera sees none of {scene_name!r}: no pixel of the {camera.width} x {camera.height} "
-                         f"image is covered, so there is nothing to score; aim it at the scene (--eye, --target, "
-                         f"--camera, or leave the default view)")
     if orbit > 1:
         _orbit(sc, camera, rows, configs, radii, orbit, normal_clamp=normal_clamp, thickness=thickness,
                screen_samples=screen_samples, seed=seed, cache=store, progress=progress)
@@ -423,10 +430,13 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                                   "estimators' sampling errors; what the screen-space model itself misses "
                                   "(thickness, hidden and off-screen geometry) cannot be measured here.")
     summary["text"] += [radius_choice.sentence()] if radius_choice is not None else []
+    summary["view_warnings"] = view_warnings(view_facts)
+    summary["text"][:0] = summary["view_warnings"]
 
     provenance = dict(
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),
         radius_rule=radius_choice.to_dict() if radius_choice is not None else None,
+        view={k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in view_facts.items()},
         methods=[c.label for c in configs], normal_clamp=bool(normal_clamp), thickness=thickness,
         references=list(references), missing_references=dict(missing), allow_open=allow_open,
         shell_thickness=({f"{r:g}": (thickness if thickness is not None else _references.SHELL_THICKNESS * r)
