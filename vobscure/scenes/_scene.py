@@ -124,8 +124,9 @@ class Scene:
         self.alpha: dict[str, AlphaMask] = _check_alpha(alpha, clean)
 
     def __repr__(self) -> str:
+        masked = f", alpha={list(self.alpha)}" if self.alpha else ""
         return (f"Scene({self.name!r}, meshes={list(self.meshes)}, triangles={len(self.triangles)}, "
-                f"extent={self.extent:.4g})")
+                f"extent={self.extent:.4g}{masked})")
 
     @property
     def center(self) -> np.ndarray:
@@ -139,10 +140,36 @@ class Scene:
 
     @cached_property
     def tracer(self):
-        """The Embree scene of these triangles, built once on first use."""
+        """The Embree scene of these triangles, built once on first use; alpha-tested meshes
+        (:attr:`alpha`) are traced with their holes (:attr:`triangle_alpha`)."""
         from ..raytrace import Tracer
 
-        return Tracer(self.triangles, face_normals=self.face_normals, extent=self.extent)
+        return Tracer(self.triangles, face_normals=self.face_normals, extent=self.extent,
+                      alpha=self.triangle_alpha)
+
+    @cached_property
+    def triangle_alpha(self):
+        """The alpha test per triangle of :attr:`triangles` (a
+        :class:`vobscure.raytrace.TriangleAlpha`: texture index per triangle, -1 opaque, the
+        masks' corner texture coordinates, textures and cutoffs), or None when no mesh has an
+        :class:`AlphaMask`."""
+        if not self.alpha:
+            return None
+        from ..raytrace import TriangleAlpha
+
+        names = list(self.meshes)
+        first = np.concatenate([[0], np.cumsum([len(m.faces) for m in self.meshes.values()])])
+        mask = np.full(len(self.triangles), -1, dtype=np.int64)
+        uv = np.zeros((len(self.triangles), 3, 2))
+        textures, cutoffs = [], []
+        for i, (key, alpha) in enumerate(self.alpha.items()):
+            j = names.index(key)
+            rows = slice(int(first[j]), int(first[j + 1]))
+            mask[rows] = i
+            uv[rows] = alpha.uv
+            textures.append(alpha.texture)
+            cutoffs.append(alpha.cutoff)
+        return TriangleAlpha(mask, uv, textures, cutoffs)
 
     @property
     def view(self) -> dict:
