@@ -46,6 +46,10 @@ __all__ = ["Tracer", "Hits", "TriangleAlpha", "texel_lookup", "OFFSET_RELATIVE",
 
 #: Ray-origin offset along the geometric normal, as a fraction of the scene scale.
 OFFSET_RELATIVE = 1e-5
+#: |cos| between a ray and a masked triangle's plane below which a ray that passes a hole
+#: restarts off the plane along the normal rather than on its own line (where stepping
+#: ``offset`` clear of the plane would take more than 10 offsets along the ray).
+COS_GRAZING = 0.1
 #: Rays handed to one embreex call; large enough to amortize the Python call, small
 #: enough to spread over the pool and keep temporary buffers in cache.
 CHUNK_RAYS = 1 << 15
@@ -224,15 +228,23 @@ class TriangleAlpha:
         object.__setattr__(self, "uv", uv)
         object.__setattr__(self, "textures", textures)
         object.__setattr__(self, "cutoffs", tuple(float(c) for c in cutoffs))
-        # every texture in one flat array: a hit's texel is one gather, whatever its texture
-        sizes = [t.size for t in textures]
-        object.__setattr__(self, "_texels", np.concatenate([t.ravel() for t in textures])
-                           if textures else np.zeros(0, np.float32))
-        object.__setattr__(self, "_start", np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
-                           if textures else np.zeros(0, np.int64))
-        object.__setattr__(self, "_height", np.array([t.shape[0] for t in textures], dtype=np.int64))
-        object.__setattr__(self, "_width", np.array([t.shape[1] for t in textures], dtype=np.int64))
-        object.__setattr__(self, "_cutoff", cutoffs.astype(np.float32))
+        # Per masked triangle ("local" index, in triangle order): uv0 and the edges uv1 - uv0,
+        # uv2 - uv0, and (first texel, height, width) of its texture in one flat array of
+        # solid flags (alpha >= that texture's cutoff), so that a hit's test is two row
+        # gathers and one flag gather, whatever its texture.
+        masked = np.flatnonzero(mask >= 0)
+        local = np.full(len(mask), -1, dtype=np.int64)
+        local[masked] = np.arange(len(masked))
+        c = uv[masked]
+        sizes = np.array([t.size for t in textures], dtype=np.int64)
+        first = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+        shape = np.array([t.shape for t in textures], dtype=np.int64).reshape(-1, 2)
+        which = mask[masked]
+        object.__setattr__(self, "_local", local)
+        object.__setattr__(self, "_uv_affine", np.concatenate([c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]], axis=1))
+        object.__setattr__(self, "_texture_of", np.column_stack([first[which], shape[which]]).reshape(-1, 3))
+        object.__setattr__(self, "_solid_texels", np.concatenate(
+            [t.ravel() >= np.float32(cut) for t, cut in zip(textures, cutoffs)]) if textures else np.zeros(0, bool))
 
     @property
     def masked(self) -> np.ndarray:
@@ -259,19 +271,27 @@ class TriangleAlpha:
         (n,) bool
         """
         prim = np.asarray(primitive, dtype=np.int64)
+        bary = np.asarray(barycentric, dtype=np.float64).reshape(-1, 2)
         out = np.ones(len(prim), dtype=bool)
-        which = self.mask[prim]
-        k = np.flatnonzero(which >= 0)
-        if not len(k):
-            return out
-        which = which[k]
-        b = np.asarray(barycentric, dtype=np.float64)[k]
-        c = self.uv[prim[k]]
-        uv = (1.0 - b[:, 0:1] - b[:, 1:2]) * c[:, 0] + b[:, 0:1] * c[:, 1] + b[:, 1:2] * c[:, 2]
-        w = self._width[which]
-        row, col = _texel_index(uv, self._height[which], w)
-        out[k] = self._texels[self._start[which] + row * w + col] >= self._cutoff[which]
+        local = self._local[prim]
+        k = np.flatnonzero(local >= 0)
+        if len(k):
+            out[k] = self._solid_local(local[k], bary[k, 0], bary[k, 1])
         return out
+
+    def _solid_local(self, local, b1, b2) -> np.ndarray:
+        """:meth:`solid` for hits on masked triangles given by their local index (the order of
+        the masked triangles), with barycentrics b1, b2 as separate (n,) arrays."""
+        a = self._uv_affine[local]                       # (n, 6): uv0, uv1 - uv0, uv2 - uv0
+        b1 = np.asarray(b1, dtype=np.float64)
+        b2 = np.asarray(b2, dtype=np.float64)
+        # (1 - b1 - b2) uv0 + b1 uv1 + b2 uv2, written from uv0 along the two edges
+        uv = np.empty((len(local), 2))
+        uv[:, 0] = a[:, 0] + b1 * a[:, 2] + b2 * a[:, 4]
+        uv[:, 1] = a[:, 1] + b1 * a[:, 3] + b2 * a[:, 5]
+        tex = self._texture_of[local]                    # (n, 3): first texel, height, width
+        row, col = _texel_index(uv, tex[:, 1], tex[:, 2])
+        return self._solid_texels[tex[:, 0] + row * tex[:, 2] + col]
 
 
 class Tracer:
@@ -340,6 +360,8 @@ class Tracer:
         if len(self._opaque_ids):
             self._scene = _embree_scene(tri[self._opaque_ids])
         self._masked = _embree_scene(tri[self._masked_ids])
+        self._masked_normals = self.face_normals[self._masked_ids]
+        self._masked_planes = np.einsum("ij,ij->i", self._masked_normals, tri[self._masked_ids, 0])
         #: passes of the alpha loop after which a ray that is still going is an error: every
         #: pass crosses one masked triangle (the restart is off its plane), so a ray that
         #: needs more passes than there are masked triangles is caught in a cycle
@@ -526,47 +548,57 @@ class Tracer:
 
         o, d : (n, 3) float32 rays; limit : (n,) float. Returns (distance (n,) float64, inf on a
         miss; primitive (n,) int64 into the full triangle array, -1 on a miss; barycentric (n, 2)).
+        The rays still going are kept compact: each pass works on them alone.
         """
         n = len(o)
         dist = np.full(n, np.inf)
         prim = np.full(n, -1, dtype=np.int64)
         bary = np.zeros((n, 2))
         limit = np.asarray(limit, dtype=np.float64)
-        o64 = o.astype(np.float64)
-        d64 = d.astype(np.float64)
-        dd = np.einsum("ij,ij->i", d64, d64)
-        start = np.zeros(n)                 # ray parameter of each ray's current origin
-        origin = o.copy()
-        active = np.flatnonzero(limit > 0)
+        ray = np.flatnonzero(limit > 0)                  # which input ray each active row is
+        org, dirs, lim = o[ray], d[ray], limit[ray]
+        start = np.zeros(len(ray))                       # ray parameter of the current origin
+        alpha, normals, planes = self.alpha, self._masked_normals, self._masked_planes
         for _ in range(self._max_passes):
-            if not len(active):
+            if not len(ray):
                 return dist, prim, bary
-            res = self._masked.run(origin[active], d[active],
-                                   dists=(limit[active] - start[active]).astype(np.float32), output=1)
-            hit = res["primID"] >= 0
-            rays = active[hit]
-            if not len(rays):
-                return dist, prim, bary
-            gid = self._masked_ids[res["primID"][hit]]
-            b = np.column_stack([res["u"][hit], res["v"][hit]]).astype(np.float64)
-            solid = self.alpha.solid(gid, b)
-            done = rays[solid]
-            dist[done] = start[done] + res["tfar"][hit][solid]
-            prim[done] = gid[solid]
-            bary[done] = b[solid]
-            # rejected hits: start again just beyond the hole, on the far side of its triangle
-            rej, g, b = rays[~solid], gid[~solid], b[~solid]
-            tri = self.triangles[g]
-            q = (1.0 - b[:, 0:1] - b[:, 1:2]) * tri[:, 0] + b[:, 0:1] * tri[:, 1] + b[:, 1:2] * tri[:, 2]
-            unit = d64[rej] / np.sqrt(dd[rej])[:, None]
-            n_f = self.face_normals[g]
-            side = np.where(np.einsum("ij,ij->i", n_f, unit) >= 0.0, 1.0, -1.0)[:, None]
-            moved = q + self.offset * (side * n_f + unit)
-            start[rej] = np.einsum("ij,ij->i", moved - o64[rej], d64[rej]) / dd[rej]
-            origin[rej] = moved.astype(np.float32)
-            active = rej[start[rej] < limit[rej]]
-        if len(active):
-            raise RuntimeError(f"the alpha test of {len(active)} ray(s) did not finish after {self._max_passes} "
+            res = self._masked.run(org, dirs, dists=(lim - start).astype(np.float32), output=1)
+            local = res["primID"]
+            hit = local >= 0
+            t, b1, b2 = res["tfar"], res["u"], res["v"]
+            if not hit.all():
+                ray, org, dirs, lim, start = ray[hit], org[hit], dirs[hit], lim[hit], start[hit]
+                local, t, b1, b2 = local[hit], t[hit], b1[hit], b2[hit]
+            solid = alpha._solid_local(local, b1, b2)
+            done = ray[solid]
+            dist[done] = start[solid] + t[solid]
+            prim[done] = self._masked_ids[local[solid]]
+            bary[done, 0] = b1[solid]
+            bary[done, 1] = b2[solid]
+            # rejected hits: start again just beyond the hole, off the far side of its triangle
+            rej = ~solid
+            ray, org, dirs, lim, start, local = ray[rej], org[rej], dirs[rej], lim[rej], start[rej], local[rej]
+            org64, d64 = org.astype(np.float64), dirs.astype(np.float64)
+            dd = np.einsum("ij,ij->i", d64, d64)
+            unit = d64 / np.sqrt(dd)[:, None]
+            n_f = normals[local]
+            cos = np.einsum("ij,ij->i", n_f, unit)
+            side = np.where(cos >= 0.0, 1.0, -1.0)
+            q = org64 + t[rej, None] * d64                   # the hit, on the ray's line
+            past = side * (np.einsum("ij,ij->i", n_f, q) - planes[local])   # how far beyond the plane
+            # Stay on the ray's line, at `offset` beyond the plane; a ray within COS_GRAZING of
+            # the plane steps `offset` along itself and `offset` off the plane instead.
+            graze = np.abs(cos) < COS_GRAZING
+            step = np.where(graze, self.offset, (self.offset - past) / np.maximum(np.abs(cos), COS_GRAZING))
+            moved = q + step[:, None] * unit
+            moved[graze] += self.offset * side[graze, None] * n_f[graze]
+            start = start + np.einsum("ij,ij->i", moved - org64, d64) / dd
+            org = moved.astype(np.float32)
+            going = start < lim
+            if not going.all():
+                ray, org, dirs, lim, start = ray[going], org[going], dirs[going], lim[going], start[going]
+        if len(ray):
+            raise RuntimeError(f"the alpha test of {len(ray)} ray(s) did not finish after {self._max_passes} "
                                f"passes over {len(self._masked_ids)} masked triangles; the masked geometry "
                                "sends rays around a cycle (please report the scene)")
         return dist, prim, bary
