@@ -144,6 +144,11 @@ def test_stacked_cards_need_several_passes():
     np.testing.assert_allclose(a.distance[a.hit], b.distance[b.hit], atol=DEPTH_ATOL)
     assert np.mean(a.hit) > 0.5
     np.testing.assert_array_equal(with_alpha.tracer.occluded(o, d), as_geometry.tracer.occluded(o, d))
+    # a length limit holds for the whole path, across the passes
+    limit = rng.uniform(0.05, 0.6, len(o))
+    np.testing.assert_array_equal(with_alpha.tracer.occluded(o, d, limit), as_geometry.tracer.occluded(o, d, limit))
+    np.testing.assert_array_equal(with_alpha.tracer.intersect(o, d, limit).primitive >= 0,
+                                  as_geometry.tracer.intersect(o, d, limit).primitive >= 0)
     # hits are on the same card (heights) in both scenes
     np.testing.assert_allclose(with_alpha.tracer.hit_points(a)[a.hit, 1],
                                as_geometry.tracer.hit_points(b)[b.hit, 1], atol=DEPTH_ATOL)
