@@ -291,3 +291,192 @@ def test_references_match_real_holes(texture, quantity):
     # power: the card with every texel solid differs visibly from the one with holes
     solid, _ = _scenes(np.ones_like(tex))
     assert _max_t(run(solid, points, normals, 3), b) > limit
+
+
+# -- loading -------------------------------------------------------------------------------
+_OBJ = """mtllib scene.mtl
+v -2 0 -2
+v 2 0 -2
+v 2 0 2
+v -2 0 2
+v -0.5 0.3 -0.5
+v 0.5 0.3 -0.5
+v 0.5 0.3 0.5
+v -0.5 0.3 0.5
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+o room
+usemtl stone
+f 1 3 2
+f 1 4 3
+usemtl leaf
+f 5/1 7/3 6/2
+f 5/1 6/2 6/2
+f 5/1 8/4 7/3
+"""
+
+
+def _rays_up(count=4000, seed=5):
+    rng = np.random.default_rng(seed)
+    o = np.column_stack([rng.uniform(-0.5, 0.5, count), np.full(count, 0.01), rng.uniform(-0.5, 0.5, count)])
+    return o, np.tile([0.0, 1.0, 0.0], (count, 1))
+
+
+def _texel_of(o, grid):
+    """The texel of a (h, w) grid on the unit card that each vertical ray crosses."""
+    h, w = grid.shape
+    col = np.floor((o[:, 0] + 0.5) * w).astype(int)
+    row = h - 1 - np.floor((o[:, 2] + 0.5) * h).astype(int)
+    return grid[row, col]
+
+
+def _write_obj(folder, leaf_statements, *, obj=_OBJ):
+    (folder / "scene.mtl").write_text("newmtl stone\nKd 0.5 0.5 0.5\nd 1.0\n\nnewmtl leaf\nKd 0.1 0.6 0.1\n"
+                                      + leaf_statements)
+    path = folder / "scene.obj"
+    path.write_text(obj)
+    return path
+
+
+def _png(path, values, mode):
+    from PIL import Image
+
+    Image.fromarray(values, mode).save(path)
+
+
+@pytest.mark.parametrize("kind", ["map_d grey", "map_d rgba", "map_Kd alpha"])
+def test_load_obj_alpha_texture(tmp_path, kind):
+    """An OBJ + MTL + PNG written here: the card's holes are the texels below 0.5, read from
+    the grey map_d, the alpha channel of an RGBA map_d, or the alpha of map_Kd; the card's
+    faces (one degenerate, dropped) keep their corner texture coordinates."""
+    alpha = np.random.default_rng(20).random((8, 8))
+    grey = (alpha * 255).astype(np.uint8)
+    rgba = np.zeros((8, 8, 4), np.uint8)
+    rgba[..., 1], rgba[..., 3] = 180, grey
+    if kind == "map_d grey":
+        _png(tmp_path / "mask.png", grey, "L")
+        path = _write_obj(tmp_path, "map_d mask.png\n")
+    elif kind == "map_d rgba":
+        _png(tmp_path / "leaf.png", rgba, "RGBA")
+        path = _write_obj(tmp_path, "map_Kd leaf.png\nmap_d leaf.png\n")
+    else:
+        _png(tmp_path / "leaf.png", rgba, "RGBA")
+        path = _write_obj(tmp_path, "map_Kd leaf.png\n")
+    with pytest.warns(vo.scenes.DegenerateFacesWarning):
+        if kind == "map_Kd alpha":
+            with pytest.warns(vo.scenes.AlphaWarning, match=r"scene\.obj, material 'leaf'.*map_Kd"):
+                scene = vo.scenes.load(path)
+        else:
+            scene = vo.scenes.load(path)
+    assert set(scene.meshes) == {"scene", "scene/leaf"} and list(scene.alpha) == ["scene/leaf"]
+    assert len(scene.alpha["scene/leaf"].uv) == 2
+    o, d = _rays_up()
+    np.testing.assert_array_equal(scene.tracer.occluded(o, d, 1.0), _texel_of(o, grey / 255.0 >= 0.5))
+
+
+def test_load_obj_dissolve_and_tr(tmp_path):
+    """A constant dissolve below 0.5 makes the card a hole, above it solid (said in a
+    warning); Tr alone is read as 1 - d."""
+    o, d = _rays_up(500)
+    for statements, blocked in [("d 0.3\n", False), ("d 0.7\n", True), ("Tr 0.8\n", False), ("Tr 0.2\n", True)]:
+        path = _write_obj(tmp_path, statements)
+        with pytest.warns(vo.scenes.AlphaWarning, match="material 'leaf'"), \
+                pytest.warns(vo.scenes.DegenerateFacesWarning):
+            scene = vo.scenes.load(path)
+        hits = scene.tracer.occluded(o, d, 1.0)
+        assert (hits.all() if blocked else not hits.any()), statements
+
+
+def test_load_gltf_mask_and_blend(tmp_path):
+    """A glTF written by trimesh with alphaMode MASK, alphaCutoff 0.3 and an RGBA base colour
+    texture times baseColorFactor alpha 0.8 (trimesh exports alphaMode and alphaCutoff); glTF
+    texture coordinates have v down, and the card comes back the right way up."""
+    from PIL import Image
+
+    values = np.random.default_rng(4).random((8, 8))
+    rgba = np.zeros((8, 8, 4), np.uint8)
+    rgba[..., 3] = np.round(values * 255).astype(np.uint8)
+    card, _ = _card(np.ones((1, 1)))
+    uv = np.column_stack([card.vertices[:, 0] + 0.5, card.vertices[:, 2] + 0.5])
+    for mode in ("MASK", "BLEND"):
+        material = trimesh.visual.material.PBRMaterial(
+            name="leaf", alphaMode=mode, alphaCutoff=0.3 if mode == "MASK" else None,
+            baseColorFactor=[1.0, 1.0, 1.0, 0.8], baseColorTexture=Image.fromarray(rgba, "RGBA"))
+        card.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
+        floor = trimesh.Trimesh(*_quad(-2, 2, -2, 2, 0.0), process=False)
+        path = tmp_path / f"{mode}.glb"
+        trimesh.Scene({"floor": floor, "card": card}).export(path)
+        if mode == "MASK":
+            scene = vo.scenes.load(path)
+            cutoff = 0.3
+        else:
+            with pytest.warns(vo.scenes.AlphaWarning, match="BLEND is read as a mask at 0.5"):
+                scene = vo.scenes.load(path)
+            cutoff = 0.5
+        (key,) = scene.alpha
+        o, d = _rays_up()
+        alpha = rgba[..., 3] / 255.0 * np.float32(0.8)
+        # away from the cutoff by more than the float32 rounding of alpha x factor
+        clear = np.abs(_texel_of(o, alpha) - cutoff) > 1e-6
+        np.testing.assert_array_equal(scene.tracer.occluded(o, d, 1.0)[clear], _texel_of(o, alpha >= cutoff)[clear])
+
+
+def test_load_alpha_false(tmp_path):
+    _png(tmp_path / "mask.png", np.zeros((4, 4), np.uint8), "L")
+    path = _write_obj(tmp_path, "map_d mask.png\n")
+    with pytest.warns(vo.scenes.AlphaWarning, match="alpha=False"), pytest.warns(vo.scenes.DegenerateFacesWarning):
+        scene = vo.scenes.load(path, alpha=False)
+    assert scene.alpha == {} and list(scene.meshes) == ["scene"]
+    o, d = _rays_up(200)
+    assert scene.tracer.occluded(o, d, 1.0).all()
+    with pytest.raises(ValueError, match="alpha must be True or False"):
+        vo.scenes.load(path, alpha="yes")
+
+
+@pytest.mark.parametrize("case", ["missing file", "unreadable", "no uv", "transform option"])
+def test_load_bad_material_names_file_material_mesh(tmp_path, case):
+    """What cannot be honoured is named (file, material, mesh) and loaded solid."""
+    obj = _OBJ
+    if case == "missing file":
+        statements, match = "map_d nowhere.png\n", "not found"
+    elif case == "unreadable":
+        (tmp_path / "broken.png").write_bytes(b"not an image at all")
+        statements, match = "map_d broken.png\n", "cannot be read"
+    elif case == "no uv":
+        _png(tmp_path / "mask.png", np.zeros((4, 4), np.uint8), "L")
+        statements, match = "map_d mask.png\n", "no texture coordinates|without texture coordinates"
+        obj = _OBJ.replace("5/1 7/3 6/2", "5 7 6").replace("5/1 8/4 7/3", "5 8 7").replace("5/1 6/2 6/2", "5 6 6")
+    else:
+        _png(tmp_path / "mask.png", np.zeros((4, 4), np.uint8), "L")
+        statements, match = "map_d -o 0.5 0 mask.png\n", "-o 0.5 0"
+    path = _write_obj(tmp_path, statements, obj=obj)
+    with pytest.warns(vo.scenes.AlphaWarning, match=rf"scene\.obj, material 'leaf' \(mesh 'scene'\): .*({match})"), \
+            pytest.warns(vo.scenes.DegenerateFacesWarning):
+        scene = vo.scenes.load(path)
+    assert scene.alpha == {}
+    o, d = _rays_up(200)
+    assert scene.tracer.occluded(o, d, 1.0).all()
+
+
+def test_load_gltf_texcoord_1_is_named(tmp_path):
+    """A base colour texture read through TEXCOORD_1 cannot be honoured: named, solid."""
+    import json
+
+    from PIL import Image
+
+    card, _ = _card(np.ones((1, 1)))
+    uv = np.column_stack([card.vertices[:, 0] + 0.5, card.vertices[:, 2] + 0.5])
+    material = trimesh.visual.material.PBRMaterial(
+        name="leaf", alphaMode="MASK", baseColorTexture=Image.fromarray(np.zeros((4, 4, 4), np.uint8), "RGBA"))
+    card.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
+    files = trimesh.Scene({"card": card}).export(file_type="gltf")
+    header = json.loads(files["model.gltf"])
+    header["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1
+    files["model.gltf"] = json.dumps(header).encode()
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    with pytest.warns(vo.scenes.AlphaWarning, match=r"model\.gltf, material 'leaf' \(mesh 'model'\): .*coordinate set 1"):
+        scene = vo.scenes.load(tmp_path / "model.gltf")
+    assert scene.alpha == {}
