@@ -23,12 +23,19 @@ Alpha-tested triangles
 A tracer built with ``alpha=`` (a :class:`TriangleAlpha`) treats the texels of masked
 triangles whose alpha is below their cutoff as holes: ``intersect`` and ``occluded`` continue
 each ray past such a hit, in either direction through the triangle. The masked triangles live
-in a second Embree scene; the opaque ones are traced once, the masked ones in passes, each
-pass starting a ray again just beyond the hit it rejected (the hit point moved
-:attr:`Tracer.offset` off the rejected triangle's plane on the far side and ``offset`` along
-the ray, the policy of :meth:`Tracer.offset_origins`) with the rest of its length. A tracer
-without masked triangles builds one scene and runs exactly the queries it would run without
-``alpha``.
+in a second Embree scene; the opaque ones are traced once, the masked ones in passes. Each
+pass starts the rays whose hit was a hole again just beyond it, with the rest of their
+length: on the ray's own line, :attr:`Tracer.offset` past the rejected triangle's plane, so
+that the ray goes on exactly as through a hole cut in the geometry (float32 cannot place an
+origin closer to a plane than about 6e-8 of the scene's scale; ``offset`` is 1e-5 of it).
+A ray within ``COS_GRAZING`` of the plane, which would need more than ten offsets along
+itself, instead restarts ``offset`` along itself and ``offset`` off the plane on the far
+side (the policy of :meth:`Tracer.offset_origins`). Every pass thus crosses a different
+masked triangle, which bounds the passes by the number of masked triangles; a ray that
+needs more is an error, not a silent answer. Geometry closer than ``offset`` behind a hole
+is not seen from that hole, the same blind distance as every ray leaving a surface.
+A tracer without masked triangles builds one scene and runs exactly the queries it would run
+without ``alpha``.
 """
 
 from __future__ import annotations
