@@ -480,3 +480,16 @@ def test_load_gltf_texcoord_1_is_named(tmp_path):
     with pytest.warns(vo.scenes.AlphaWarning, match=r"model\.gltf, material 'leaf' \(mesh 'model'\): .*coordinate set 1"):
         scene = vo.scenes.load(tmp_path / "model.gltf")
     assert scene.alpha == {}
+
+
+def test_docs_example_runs(capsys):
+    """The example of docs/alpha.md runs as written and prints what the page says."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "alpha.md").read_text()
+    code = re.findall(r"```python\n(.*?)```", page, flags=re.S)
+    printed = re.findall(r"```text\n(.*?)```", page, flags=re.S)
+    assert len(code) == 1 and len(printed) == 1, "docs/alpha.md lost its example"
+    exec(compile(code[0], "docs/alpha.md", "exec"), {})
+    assert capsys.readouterr().out == printed[0]
