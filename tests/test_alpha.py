@@ -493,3 +493,27 @@ def test_docs_example_runs(capsys):
     assert len(code) == 1 and len(printed) == 1, "docs/alpha.md lost its example"
     exec(compile(code[0], "docs/alpha.md", "exec"), {})
     assert capsys.readouterr().out == printed[0]
+
+
+def test_cache_digest_tells_alpha_apart():
+    """A cached reference of the scene with holes is never reused for the same triangles
+    without them (or with another texture or cutoff)."""
+    from vobscure.experiments.cache import scene_digest
+
+    card, mask = _card(_checker())
+    plain = vo.Scene({"card": card})
+    digests = {scene_digest(plain), scene_digest(vo.Scene({"card": card}, alpha={"card": mask})),
+               scene_digest(vo.Scene({"card": card}, alpha={"card": _card(_checker(), cutoff=0.7)[1]})),
+               scene_digest(vo.Scene({"card": card}, alpha={"card": _card(_disc())[1]}))}
+    assert len(digests) == 4
+    assert scene_digest(vo.Scene({"card": card}, alpha={"card": mask})) == scene_digest(
+        vo.Scene({"card": card}, alpha={"card": _card(_checker())[1]}))
+
+
+def test_missing_material_library_is_named(tmp_path):
+    path = tmp_path / "scene.obj"
+    path.write_text(_OBJ)
+    with pytest.warns(vo.scenes.AlphaWarning, match=r"scene\.obj: its material library 'scene\.mtl' is not found"), \
+            pytest.warns(vo.scenes.DegenerateFacesWarning):
+        scene = vo.scenes.load(path)
+    assert scene.alpha == {}

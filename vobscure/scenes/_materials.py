@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["AlphaWarning", "MTL_CUTOFF", "MaterialAlpha", "mtl_materials", "gltf_materials", "image_channel"]
+__all__ = ["AlphaWarning", "MTL_CUTOFF", "MaterialAlpha", "mtl_libraries", "mtl_materials", "gltf_materials",
+           "gltf_material", "image_channel"]
 
 #: Cutoff of MTL materials (MTL has none): 0.5, glTF's default ``alphaCutoff``.
 MTL_CUTOFF = 0.5
@@ -116,7 +117,7 @@ def _open_image(path: Path):
 
 
 # -- OBJ / MTL -----------------------------------------------------------------------------
-def _mtl_libraries(obj_path: Path) -> list[Path]:
+def mtl_libraries(obj_path: Path) -> list[Path]:
     """The MTL files an OBJ file names (``mtllib``), relative to its folder."""
     out = []
     with open(obj_path, "r", errors="replace") as f:
@@ -191,7 +192,7 @@ def mtl_materials(obj_path: Path, *, read_images: bool = True) -> dict[str, Mate
     telling whether a file has alpha at all.
     """
     out: dict[str, MaterialAlpha] = {}
-    for library in _mtl_libraries(obj_path):
+    for library in mtl_libraries(obj_path):
         if not library.exists():
             continue        # trimesh loads the geometry without it; nothing has alpha
         statements: dict[str, dict] = {}

@@ -268,6 +268,10 @@ def _face_keys(triangles: np.ndarray) -> list[bytes]:
 
 
 def _obj_face_alpha(path: Path, parts, notes: _Notes) -> list:
+    for library in _materials.mtl_libraries(path):
+        if not library.is_file():
+            notes.add(f"its material library {library.name!r} is not found (looked for {library}); the "
+                      "alpha of its materials is not read and every mesh is loaded solid", "", [])
     table = _materials.mtl_materials(path)
     if not table:
         return [None] * len(parts)
