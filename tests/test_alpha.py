@@ -517,3 +517,25 @@ def test_missing_material_library_is_named(tmp_path):
             pytest.warns(vo.scenes.DegenerateFacesWarning):
         scene = vo.scenes.load(path)
     assert scene.alpha == {}
+
+
+def test_load_gltf_missing_texture_is_named(tmp_path):
+    """A .gltf whose base colour image file is missing: named, loaded solid."""
+    import json
+
+    from PIL import Image
+
+    card, _ = _card(np.ones((1, 1)))
+    uv = np.column_stack([card.vertices[:, 0] + 0.5, card.vertices[:, 2] + 0.5])
+    material = trimesh.visual.material.PBRMaterial(
+        name="leaf", alphaMode="MASK", baseColorTexture=Image.fromarray(np.zeros((4, 4, 4), np.uint8), "RGBA"))
+    card.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
+    files = trimesh.Scene({"card": card}).export(file_type="gltf")
+    header = json.loads(files["model.gltf"])
+    header["images"] = [{"uri": "leaf_missing.png"}]
+    files["model.gltf"] = json.dumps(header).encode()
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    with pytest.warns(vo.scenes.AlphaWarning, match=r"model\.gltf, material 'leaf' \(mesh 'model'\): .*could not be read"):
+        scene = vo.scenes.load(tmp_path / "model.gltf")
+    assert scene.alpha == {}

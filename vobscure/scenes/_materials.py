@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["AlphaWarning", "MTL_CUTOFF", "MaterialAlpha", "mtl_libraries", "mtl_materials", "gltf_materials",
-           "gltf_material", "image_channel"]
+           "gltf_material", "match_gltf_material", "image_channel"]
 
 #: Cutoff of MTL materials (MTL has none): 0.5, glTF's default ``alphaCutoff``.
 MTL_CUTOFF = 0.5
@@ -319,6 +319,7 @@ def gltf_materials(path: Path) -> list[dict]:
         factor = pbr.get("baseColorFactor", [1.0, 1.0, 1.0, 1.0])
         texture = pbr.get("baseColorTexture")
         out.append({
+            "key": mat.get("name"),          # what trimesh's PBRMaterial.name holds (None unnamed)
             "name": mat.get("name", f"material {i}"),
             "mode": str(mat.get("alphaMode", "OPAQUE")).upper(),
             "cutoff": float(mat.get("alphaCutoff", 0.5)),
@@ -336,6 +337,27 @@ def gltf_materials(path: Path) -> list[dict]:
                 if label not in out[k]["meshes"]:
                     out[k]["meshes"].append(label)
     return out
+
+
+def _alpha_fields(info: dict) -> tuple:
+    return (info["mode"], info["cutoff"], info["factor"], info["texture"], info["texcoord"], info["transform"])
+
+
+def match_gltf_material(infos: list[dict], pbr) -> dict | None:
+    """The entry of :func:`gltf_materials` that trimesh's PBRMaterial ``pbr`` came from, as far
+    as the alpha is concerned: trimesh keeps a material's name, not its index, so the entries
+    of that name whose fields agree with ``pbr``'s are taken; None when they differ in their
+    alpha fields (the material cannot be told apart)."""
+    name = getattr(pbr, "name", None)
+    mode = str(getattr(pbr, "alphaMode", None) or "OPAQUE").upper()
+    cutoff = getattr(pbr, "alphaCutoff", None)
+    factor = getattr(pbr, "baseColorFactor", None)       # trimesh: uint8 RGBA
+    candidates = [m for m in infos if m["key"] == name and m["mode"] == mode
+                  and (cutoff is None or abs(m["cutoff"] - float(cutoff)) < 1e-6)
+                  and (factor is None or abs(m["factor"] - float(factor[3]) / 255.0) <= 0.5 / 255.0 + 1e-9)]
+    if not candidates or len({_alpha_fields(m) for m in candidates}) != 1:
+        return None
+    return candidates[0]
 
 
 def gltf_material(info: dict, pbr) -> MaterialAlpha | None:

@@ -205,21 +205,29 @@ def _compact(vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
 
 
 class _Notes:
-    """The AlphaWarnings of one load, gathered: one per message and material, naming the meshes."""
+    """The AlphaWarnings of one load, gathered: one per message, naming each material it is
+    about with its meshes."""
 
     def __init__(self, file: str):
         self.file = file
-        self.items: dict[tuple[str, str], list[str]] = {}
+        self.items: dict[str, dict[str, list[str]]] = {}
 
     def add(self, message: str, material: str, meshes) -> None:
-        listed = self.items.setdefault((message, material), [])
+        listed = self.items.setdefault(message, {}).setdefault(material, [])
         listed.extend(m for m in meshes if m not in listed)
 
     def emit(self) -> None:
-        for (message, material), meshes in self.items.items():
-            where = f", material {material!r}" if material else ""
-            parts = f" (mesh{'es' if len(meshes) > 1 else ''} {', '.join(map(repr, meshes))})" if meshes else ""
-            warnings.warn(f"{self.file}{where}{parts}: {message}", AlphaWarning, stacklevel=3)
+        for message, materials in self.items.items():
+            about = []
+            for material, meshes in materials.items():
+                if not material:
+                    continue
+                label = f"material {material!r}"
+                if meshes:
+                    label += f" (mesh{'es' if len(meshes) > 1 else ''} {', '.join(map(repr, meshes))})"
+                about.append(label)
+            where = (", " + ", ".join(about)) if about else ""
+            warnings.warn(f"{self.file}{where}: {message}", AlphaWarning, stacklevel=3)
 
 
 def _has_alpha(path: Path, ext: str) -> bool:
@@ -338,22 +346,21 @@ def _gltf_face_alpha(path: Path, parts, notes: _Notes) -> list:
         return [None] * len(parts)
     if not any(m["mode"] in ("MASK", "BLEND") for m in info):
         return [None] * len(parts)
-    by_name: dict[str, list[int]] = {}
-    for i, m in enumerate(info):
-        by_name.setdefault(m["name"], []).append(i)
     out = []
+    matched = set()
     for part_name, _, faces, geometry in parts:
         pbr = getattr(getattr(geometry, "visual", None), "material", None)
-        candidates = by_name.get(getattr(pbr, "name", None), [])
-        if len(candidates) != 1:
-            # trimesh keeps the material's name, not its index: a name shared by several
-            # materials (or none) cannot be traced back to the file's alpha fields
-            if str(getattr(pbr, "alphaMode", None) or "OPAQUE").upper() in ("MASK", "BLEND"):
-                notes.add("the material cannot be told apart from others of the same name; loaded solid",
-                          str(getattr(pbr, "name", "")), [part_name])
+        if pbr is None or str(getattr(pbr, "alphaMode", None) or "OPAQUE").upper() not in ("MASK", "BLEND"):
             out.append(None)
             continue
-        material = _materials.gltf_material(info[candidates[0]], pbr)
+        entry = _materials.match_gltf_material(info, pbr)
+        if entry is None:
+            notes.add("the material cannot be told apart from others of the same name with other alpha "
+                      "settings; loaded solid", str(getattr(pbr, "name", "")), [part_name])
+            out.append(None)
+            continue
+        matched.add(id(entry))
+        material = _materials.gltf_material(entry, pbr)
         if material is None or not _usable(material, [part_name], notes):
             out.append(None)
             continue
@@ -366,6 +373,10 @@ def _gltf_face_alpha(path: Path, parts, notes: _Notes) -> list:
                 out.append(None)
                 continue
         out.append((np.zeros(len(faces), dtype=np.int64), uv, [material]))
+    for m in info:
+        if m["mode"] in ("MASK", "BLEND") and m["meshes"] and id(m) not in matched:
+            notes.add(f"alphaMode {m['mode']}, but trimesh attached the material to no mesh it loaded; its "
+                      "meshes are loaded solid", m["name"], m["meshes"])
     return out
 
 
