@@ -539,3 +539,15 @@ def test_load_gltf_missing_texture_is_named(tmp_path):
     with pytest.warns(vo.scenes.AlphaWarning, match=r"model\.gltf, material 'leaf' \(mesh 'model'\): .*could not be read"):
         scene = vo.scenes.load(tmp_path / "model.gltf")
     assert scene.alpha == {}
+
+
+def test_holes_open_a_closed_mesh():
+    """A closed box whose alpha test has holes has no inside: it is open for the references."""
+    box = trimesh.creation.box()
+    uv = np.zeros((len(box.faces), 3, 2))
+    with_holes = vo.Scene({"box": box}, alpha={"box": AlphaMask(uv, [[0.0, 1.0]])})
+    without = vo.Scene({"box": box}, alpha={"box": AlphaMask(uv, [[0.6, 1.0]])})
+    assert with_holes.open_meshes == ["box"] and not with_holes.is_watertight
+    assert without.open_meshes == [] and without.is_watertight
+    with pytest.raises(ValueError, match="closed"):
+        vo.volumetric_obscurance(with_holes, [[0, 0.5, 0]], radius=0.1, samples=16)

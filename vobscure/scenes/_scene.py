@@ -135,8 +135,17 @@ class Scene:
 
     @cached_property
     def is_watertight(self) -> bool:
-        """True when every mesh is closed and consistently wound (inside/outside defined)."""
-        return all(m.is_watertight and m.is_winding_consistent for m in self.meshes.values())
+        """True when every mesh is closed and consistently wound (inside/outside defined):
+        :attr:`open_meshes` is empty."""
+        return not self.open_meshes
+
+    @cached_property
+    def open_meshes(self) -> list[str]:
+        """Names of the meshes that do not bound a solid: not closed, not consistently wound,
+        or alpha-tested with holes (texels below the cutoff), which open a closed mesh."""
+        return [k for k, m in self.meshes.items()
+                if not (m.is_watertight and m.is_winding_consistent)
+                or (k in self.alpha and bool(np.any(self.alpha[k].texture < self.alpha[k].cutoff)))]
 
     @cached_property
     def tracer(self):
