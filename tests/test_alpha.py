@@ -346,11 +346,12 @@ def _png(path, values, mode):
     Image.fromarray(values, mode).save(path)
 
 
-@pytest.mark.parametrize("kind", ["map_d grey", "map_d rgba", "map_Kd alpha"])
+@pytest.mark.parametrize("kind", ["map_d grey", "map_d rgba", "map_Kd alpha", "map_d -imfchan r"])
 def test_load_obj_alpha_texture(tmp_path, kind):
     """An OBJ + MTL + PNG written here: the card's holes are the texels below 0.5, read from
-    the grey map_d, the alpha channel of an RGBA map_d, or the alpha of map_Kd; the card's
-    faces (one degenerate, dropped) keep their corner texture coordinates."""
+    the grey map_d, the alpha channel of an RGBA map_d, the alpha of map_Kd, or the channel
+    -imfchan names; the card's faces (one degenerate, dropped) keep their corner texture
+    coordinates."""
     alpha = np.random.default_rng(20).random((8, 8))
     grey = (alpha * 255).astype(np.uint8)
     rgba = np.zeros((8, 8, 4), np.uint8)
@@ -361,9 +362,13 @@ def test_load_obj_alpha_texture(tmp_path, kind):
     elif kind == "map_d rgba":
         _png(tmp_path / "leaf.png", rgba, "RGBA")
         path = _write_obj(tmp_path, "map_Kd leaf.png\nmap_d leaf.png\n")
-    else:
+    elif kind == "map_Kd alpha":
         _png(tmp_path / "leaf.png", rgba, "RGBA")
         path = _write_obj(tmp_path, "map_Kd leaf.png\n")
+    else:   # the red channel is the mask; the luminance would not be
+        rgb = np.stack([grey, 255 - grey, 255 - grey], axis=-1)
+        _png(tmp_path / "mask.png", rgb, "RGB")
+        path = _write_obj(tmp_path, "map_d -imfchan r mask.png\n")
     with pytest.warns(vo.scenes.DegenerateFacesWarning):
         if kind == "map_Kd alpha":
             with pytest.warns(vo.scenes.AlphaWarning, match=r"scene\.obj, material 'leaf'.*map_Kd"):

@@ -9,8 +9,9 @@ OBJ / MTL (Alias|Wavefront, *File Formats* v4.2, 1995, ch. 5 "Material Library F
   by the d value"; the channel is ``-imfchan`` (r, g, b, m = matte/alpha, l = luminance),
   whose default for scalar textures is luminance. An image with an alpha channel is read
   through that channel instead, as Blender's OBJ importer does (it links the map_d image's
-  Alpha output to the shader's Alpha; ``obj_import_mtl.cc``), which is what its exporter
-  writes: the RGBA image whose alpha is the cut-out.
+  Alpha output to the shader's Alpha; ``importer/obj_import_mtl.cc``); its exporter writes
+  the image linked to the shader's Alpha input as map_d (``exporter/obj_export_mtl.cc``),
+  typically the RGBA colour image whose alpha is the cut-out.
 - The alpha channel of ``map_Kd``, when its image has one and there is no ``map_d``, is read
   as the dissolve too (said in a warning: the specification has no such rule).
 - MTL has no cutoff: :data:`MTL_CUTOFF`.
