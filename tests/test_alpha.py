@@ -556,3 +556,18 @@ def test_holes_open_a_closed_mesh():
     assert without.open_meshes == [] and without.is_watertight
     with pytest.raises(ValueError, match="closed"):
         vo.volumetric_obscurance(with_holes, [[0, 0.5, 0]], radius=0.1, samples=16)
+
+
+def test_cutoff_compared_in_float64_everywhere():
+    """A float32 alpha just below a float64 cutoff that rounds down to it in float32 is a hole
+    for the tracer, for AlphaMask.solid and for the scene's hole count alike."""
+    cutoff = float(np.float32(0.1)) + 1e-10    # rounds to float32(0.1) (spacing 7e-9 there)
+    texel = np.float32(0.1)
+    assert np.float32(cutoff) <= texel and float(texel) < cutoff
+    card, mask = _card(np.full((2, 2), texel), cutoff=cutoff)
+    scene = vo.Scene({"card": card}, alpha={"card": mask})
+    assert mask.has_holes and not mask.solid([[0.5, 0.5]])[0]
+    assert not scene.tracer.occluded([[0.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])[0]
+    # and a mask without holes is traced as an opaque mesh, with no alpha pass at all
+    solid = vo.Scene({"card": card}, alpha={"card": _card(np.full((2, 2), texel), cutoff=0.05)[1]})
+    assert solid.triangle_alpha is None and solid.tracer.occluded([[0.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])[0]

@@ -195,7 +195,8 @@ class TriangleAlpha:
         Alpha in [0, 1]; row 0 is the top of the image.
     cutoffs : sequence of float
         One per texture: a texel whose alpha is below it is a hole; ``alpha >= cutoff`` is
-        solid (glTF 2.0, ``material.alphaCutoff``), so cutoff 0 makes every texel solid.
+        solid (glTF 2.0, ``material.alphaCutoff``), so cutoff 0 makes every texel solid. The
+        comparison is made once, in float64, when the tracer is built.
 
     Examples
     --------
@@ -251,7 +252,7 @@ class TriangleAlpha:
         object.__setattr__(self, "_uv_affine", np.concatenate([c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]], axis=1))
         object.__setattr__(self, "_texture_of", np.column_stack([first[which], shape[which]]).reshape(-1, 3))
         object.__setattr__(self, "_solid_texels", np.concatenate(
-            [t.ravel() >= np.float32(cut) for t, cut in zip(textures, cutoffs)]) if textures else np.zeros(0, bool))
+            [t.ravel().astype(np.float64) >= cut for t, cut in zip(textures, cutoffs)]) if textures else np.zeros(0, bool))
 
     @property
     def masked(self) -> np.ndarray:

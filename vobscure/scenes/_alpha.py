@@ -68,9 +68,19 @@ class AlphaMask:
     def _where(self) -> str:
         return f" ({self.source})" if self.source else ""
 
+    @property
+    def holes(self) -> np.ndarray:
+        """(h, w) bool: the texels that are holes, ``alpha < cutoff`` (compared in float64)."""
+        return self.texture.astype(np.float64) < self.cutoff
+
+    @property
+    def has_holes(self) -> bool:
+        """Whether any texel is a hole (a mask without holes is an opaque mesh)."""
+        return bool(np.any(self.holes))
+
     def __repr__(self) -> str:
         h, w = self.texture.shape
-        holes = float(np.mean(self.texture < self.cutoff))
+        holes = float(np.mean(self.holes))
         source = f", source={self.source!r}" if self.source else ""
         return (f"AlphaMask(faces={len(self.uv)}, texture={h}x{w}, cutoff={self.cutoff:g}, "
                 f"hole_texels={holes:.1%}{source})")
@@ -96,4 +106,4 @@ class AlphaMask:
     def solid(self, uv) -> np.ndarray:
         """(...,) bool: whether the texel at each texture coordinate is solid
         (``alpha >= cutoff``, glTF 2.0 ``alphaCutoff`` semantics)."""
-        return self.lookup(uv) >= self.cutoff
+        return self.lookup(uv).astype(np.float64) >= self.cutoff

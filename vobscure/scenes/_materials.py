@@ -77,7 +77,7 @@ class MaterialAlpha:
     @property
     def is_masked(self) -> bool:
         """Whether any texel is a hole (otherwise the material is opaque)."""
-        return bool(np.any(self.alpha < self.cutoff))
+        return bool(np.any(self.alpha.astype(np.float64) < self.cutoff))
 
 
 def image_channel(image, channel: str | None = None) -> np.ndarray:

@@ -145,7 +145,7 @@ class Scene:
         or alpha-tested with holes (texels below the cutoff), which open a closed mesh."""
         return [k for k, m in self.meshes.items()
                 if not (m.is_watertight and m.is_winding_consistent)
-                or (k in self.alpha and bool(np.any(self.alpha[k].texture < self.alpha[k].cutoff)))]
+                or (k in self.alpha and self.alpha[k].has_holes)]
 
     @cached_property
     def tracer(self):
@@ -161,8 +161,9 @@ class Scene:
         """The alpha test per triangle of :attr:`triangles` (a
         :class:`vobscure.raytrace.TriangleAlpha`: texture index per triangle, -1 opaque, the
         masks' corner texture coordinates, textures and cutoffs), or None when no mesh has an
-        :class:`AlphaMask`."""
-        if not self.alpha:
+        :class:`AlphaMask` with a hole (a mask whose texels are all solid is opaque)."""
+        holed = {k: a for k, a in self.alpha.items() if a.has_holes}
+        if not holed:
             return None
         from ..raytrace import TriangleAlpha
 
@@ -171,7 +172,7 @@ class Scene:
         mask = np.full(len(self.triangles), -1, dtype=np.int64)
         uv = np.zeros((len(self.triangles), 3, 2))
         textures, cutoffs = [], []
-        for i, (key, alpha) in enumerate(self.alpha.items()):
+        for i, (key, alpha) in enumerate(holed.items()):
             j = names.index(key)
             rows = slice(int(first[j]), int(first[j + 1]))
             mask[rows] = i
