@@ -17,6 +17,25 @@ absolute epsilon that works for a 0.15-unit bunny fails for a 1e4-unit building 
 versa. ``OFFSET_RELATIVE = 1e-5`` leaves two orders of magnitude of margin over float32
 rounding and is far below any gap a scene would resolve (the groove test in
 ``tests/test_raytrace.py`` checks that occluders at 1e-3 of the extent are still found).
+
+Alpha-tested triangles
+----------------------
+A tracer built with ``alpha=`` (a :class:`TriangleAlpha`) treats the texels of masked
+triangles whose alpha is below their cutoff as holes: ``intersect`` and ``occluded`` continue
+each ray past such a hit, in either direction through the triangle. The masked triangles live
+in a second Embree scene; the opaque ones are traced once, the masked ones in passes. Each
+pass starts the rays whose hit was a hole again just beyond it, with the rest of their
+length: on the ray's own line, :attr:`Tracer.offset` past the rejected triangle's plane, so
+that the ray goes on exactly as through a hole cut in the geometry (float32 cannot place an
+origin closer to a plane than about 6e-8 of the scene's scale; ``offset`` is 1e-5 of it).
+A ray within ``COS_GRAZING`` of the plane, which would need more than ten offsets along
+itself, instead restarts ``offset`` along itself and ``offset`` off the plane on the far
+side (the policy of :meth:`Tracer.offset_origins`). Every pass thus crosses a different
+masked triangle, which bounds the passes by the number of masked triangles; a ray that
+needs more is an error, not a silent answer. Geometry closer than ``offset`` behind a hole
+is not seen from that hole, the same blind distance as every ray leaving a surface.
+A tracer without masked triangles builds one scene and runs exactly the queries it would run
+without ``alpha``.
 """
 
 from __future__ import annotations
@@ -29,10 +48,15 @@ import numpy as np
 
 from ._validate import as_array, check_int
 
-__all__ = ["Tracer", "Hits", "OFFSET_RELATIVE", "default_threads", "parallel_map"]
+__all__ = ["Tracer", "Hits", "TriangleAlpha", "texel_lookup", "OFFSET_RELATIVE", "default_threads",
+           "parallel_map"]
 
 #: Ray-origin offset along the geometric normal, as a fraction of the scene scale.
 OFFSET_RELATIVE = 1e-5
+#: |cos| between a ray and a masked triangle's plane below which a ray that passes a hole
+#: restarts off the plane along the normal rather than on its own line (where stepping
+#: ``offset`` clear of the plane would take more than 10 offsets along the ray).
+COS_GRAZING = 0.1
 #: Rays handed to one embreex call; large enough to amortize the Python call, small
 #: enough to spread over the pool and keep temporary buffers in cache.
 CHUNK_RAYS = 1 << 15
@@ -110,6 +134,174 @@ class Hits:
         return self.primitive >= 0
 
 
+def _texel_index(uv: np.ndarray, height, width) -> tuple[np.ndarray, np.ndarray]:
+    """(row, column) of the texel that contains each texture coordinate (nearest, repeat)."""
+    u = uv[..., 0] - np.floor(uv[..., 0])   # repeat: the fractional part, in [0, 1]
+    v = uv[..., 1] - np.floor(uv[..., 1])
+    # u - floor(u) rounds to exactly 1.0 for a tiny negative u: clamp into the last texel
+    col = np.minimum((u * width).astype(np.int64), np.asarray(width) - 1)
+    # v up, row 0 the top of the image: v in [0, 1/h) is the bottom row h - 1
+    row = np.asarray(height) - 1 - np.minimum((v * height).astype(np.int64), np.asarray(height) - 1)
+    return row, col
+
+
+def texel_lookup(texture, uv) -> np.ndarray:
+    """Alpha of ``texture`` at texture coordinates ``uv``: nearest texel, repeat wrap.
+
+    Parameters
+    ----------
+    texture : (h, w) float
+        Row 0 is the top of the image (v = 1).
+    uv : (..., 2) float
+        OpenGL / OBJ convention: u to the right, v up, (0, 0) the bottom-left corner. The
+        texel that contains (u mod 1, v mod 1) is returned: texel (row i, column j) covers
+        u in [j / w, (j + 1) / w) and v in [1 - (i + 1) / h, 1 - i / h). No interpolation:
+        the alpha test is exact on a texel's area, as a rasterizer's nearest-neighbour
+        (``GL_NEAREST``, ``GL_REPEAT``) lookup.
+
+    Returns
+    -------
+    (...,) float32
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tex = np.array([[0.0, 1.0], [0.25, 0.5]])     # top row, bottom row
+    >>> texel_lookup(tex, [[0.1, 0.9], [0.9, 0.9], [0.1, 0.1], [1.9, -0.9]]).tolist()
+    [0.0, 1.0, 0.25, 0.5]
+    """
+    tex = np.asarray(texture, dtype=np.float32)
+    if tex.ndim != 2 or tex.size == 0:
+        raise ValueError(f"texture must be a non-empty (height, width) array, got shape {tex.shape}")
+    uv = np.asarray(uv, dtype=np.float64)
+    if uv.shape[-1:] != (2,):
+        raise ValueError(f"uv must have shape (..., 2), got {uv.shape}")
+    row, col = _texel_index(uv, tex.shape[0], tex.shape[1])
+    return tex[row, col]
+
+
+@dataclass(frozen=True, eq=False)
+class TriangleAlpha:
+    """The alpha test of a tracer's triangles, one entry per triangle.
+
+    Parameters
+    ----------
+    mask : (m,) int
+        Index into ``textures`` of each triangle's alpha texture; -1 for an opaque triangle.
+    uv : (m, 3, 2) float
+        Texture coordinates of each triangle's corners, in the order of its vertices (the
+        rows of opaque triangles are not read). Convention of :func:`texel_lookup`.
+    textures : sequence of (h, w) float
+        Alpha in [0, 1]; row 0 is the top of the image.
+    cutoffs : sequence of float
+        One per texture: a texel whose alpha is below it is a hole; ``alpha >= cutoff`` is
+        solid (glTF 2.0, ``material.alphaCutoff``), so cutoff 0 makes every texel solid. The
+        comparison is made once, in float64, when the tracer is built.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> uv = np.array([[[0, 0], [1, 0], [0, 1]]] * 2, float)
+    >>> a = TriangleAlpha([-1, 0], uv, [np.array([[1.0, 0.0]])], [0.5])
+    >>> a.solid([0, 1, 1], [[0.5, 0.1], [0.1, 0.1], [0.8, 0.1]]).tolist()   # u > 0.5 is a hole
+    [True, True, False]
+    """
+
+    mask: np.ndarray
+    uv: np.ndarray
+    textures: tuple
+    cutoffs: tuple
+
+    def __post_init__(self):
+        mask = np.asarray(self.mask)
+        if mask.ndim != 1 or (mask.size and mask.dtype.kind not in "iu"):
+            raise ValueError(f"alpha mask must be a 1-D integer array (one texture index per triangle, "
+                             f"-1 opaque), got shape {mask.shape} and dtype {mask.dtype}")
+        mask = mask.astype(np.int64)
+        uv = as_array(self.uv, "alpha uv", shape=(len(mask), 3, 2))
+        textures = tuple(np.asarray(t, dtype=np.float32) for t in self.textures)
+        cutoffs = np.asarray(self.cutoffs, dtype=np.float64).reshape(-1)
+        if len(cutoffs) != len(textures):
+            raise ValueError(f"alpha needs one cutoff per texture, got {len(cutoffs)} cutoffs "
+                             f"for {len(textures)} textures")
+        if np.any(~np.isfinite(cutoffs)) or np.any((cutoffs < 0) | (cutoffs > 1)):
+            raise ValueError("alpha cutoffs must be in [0, 1]")
+        for i, tex in enumerate(textures):
+            if tex.ndim != 2 or tex.size == 0:
+                raise ValueError(f"alpha texture {i} must be a non-empty (height, width) array, "
+                                 f"got shape {tex.shape}")
+        if mask.size and (mask.min() < -1 or mask.max() >= len(textures)):
+            raise ValueError(f"alpha mask holds texture indices outside [-1, {len(textures) - 1}]")
+        object.__setattr__(self, "mask", mask)
+        object.__setattr__(self, "uv", uv)
+        object.__setattr__(self, "textures", textures)
+        object.__setattr__(self, "cutoffs", tuple(float(c) for c in cutoffs))
+        # Per masked triangle ("local" index, in triangle order): uv0 and the edges uv1 - uv0,
+        # uv2 - uv0, and (first texel, height, width) of its texture in one flat array of
+        # solid flags (alpha >= that texture's cutoff), so that a hit's test is two row
+        # gathers and one flag gather, whatever its texture.
+        masked = np.flatnonzero(mask >= 0)
+        local = np.full(len(mask), -1, dtype=np.int64)
+        local[masked] = np.arange(len(masked))
+        c = uv[masked]
+        sizes = np.array([t.size for t in textures], dtype=np.int64)
+        first = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+        shape = np.array([t.shape for t in textures], dtype=np.int64).reshape(-1, 2)
+        which = mask[masked]
+        object.__setattr__(self, "_local", local)
+        object.__setattr__(self, "_uv_affine", np.concatenate([c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]], axis=1))
+        object.__setattr__(self, "_texture_of", np.column_stack([first[which], shape[which]]).reshape(-1, 3))
+        object.__setattr__(self, "_solid_texels", np.concatenate(
+            [t.ravel().astype(np.float64) >= cut for t, cut in zip(textures, cutoffs)]) if textures else np.zeros(0, bool))
+
+    @property
+    def masked(self) -> np.ndarray:
+        """(m,) bool: the triangles with an alpha test."""
+        return self.mask >= 0
+
+    def __repr__(self) -> str:
+        return (f"TriangleAlpha(triangles={len(self.mask)}, masked={int(np.count_nonzero(self.masked))}, "
+                f"textures={[t.shape for t in self.textures]}, cutoffs={list(self.cutoffs)})")
+
+    def solid(self, primitive, barycentric) -> np.ndarray:
+        """Whether each hit lands on a solid texel (True on opaque triangles).
+
+        Parameters
+        ----------
+        primitive : (n,) int
+            Triangle indices (no misses).
+        barycentric : (n, 2) float
+            Embree's (u, v) of each hit: the texture coordinates are interpolated as
+            (1 - u - v) uv0 + u uv1 + v uv2, then looked up as in :func:`texel_lookup`.
+
+        Returns
+        -------
+        (n,) bool
+        """
+        prim = np.asarray(primitive, dtype=np.int64)
+        bary = np.asarray(barycentric, dtype=np.float64).reshape(-1, 2)
+        out = np.ones(len(prim), dtype=bool)
+        local = self._local[prim]
+        k = np.flatnonzero(local >= 0)
+        if len(k):
+            out[k] = self._solid_local(local[k], bary[k, 0], bary[k, 1])
+        return out
+
+    def _solid_local(self, local, b1, b2) -> np.ndarray:
+        """:meth:`solid` for hits on masked triangles given by their local index (the order of
+        the masked triangles), with barycentrics b1, b2 as separate (n,) arrays."""
+        a = self._uv_affine[local]                       # (n, 6): uv0, uv1 - uv0, uv2 - uv0
+        b1 = np.asarray(b1, dtype=np.float64)
+        b2 = np.asarray(b2, dtype=np.float64)
+        # (1 - b1 - b2) uv0 + b1 uv1 + b2 uv2, written from uv0 along the two edges
+        uv = np.empty((len(local), 2))
+        uv[:, 0] = a[:, 0] + b1 * a[:, 2] + b2 * a[:, 4]
+        uv[:, 1] = a[:, 1] + b1 * a[:, 3] + b2 * a[:, 5]
+        tex = self._texture_of[local]                    # (n, 3): first texel, height, width
+        row, col = _texel_index(uv, tex[:, 1], tex[:, 2])
+        return self._solid_texels[tex[:, 0] + row * tex[:, 2] + col]
+
+
 class Tracer:
     """An Embree scene over a fixed set of triangles, with batched, threaded queries.
 
@@ -123,6 +315,10 @@ class Tracer:
         The scene's length scale (bounding-box diagonal); computed when omitted.
     threads : int, optional
         Worker threads for queries; default :func:`default_threads`.
+    alpha : TriangleAlpha, optional
+        The alpha test of the triangles: texels below the cutoff of a masked triangle are
+        holes for every query (see the module's notes). Without masked triangles the tracer
+        is the plain one.
 
     Examples
     --------
@@ -135,9 +331,8 @@ class Tracer:
     1.0
     """
 
-    def __init__(self, triangles, *, face_normals=None, extent=None, threads: int | None = None):
-        from embreex import mesh_construction, rtcore_scene
-
+    def __init__(self, triangles, *, face_normals=None, extent=None, threads: int | None = None,
+                 alpha: TriangleAlpha | None = None):
         tri = as_array(triangles, "triangles", shape=(None, 3, 3))
         if len(tri) == 0:
             raise ValueError("triangles must hold at least one triangle, got an empty array")
@@ -154,15 +349,36 @@ class Tracer:
         #: ray-origin offset along the geometric normal (world units)
         self.offset = OFFSET_RELATIVE * self.scale
         self.threads = check_int(threads, "threads") if threads is not None else default_threads()
-        self._scene = rtcore_scene.EmbreeScene()
-        mesh_construction.TriangleMesh(self._scene, np.ascontiguousarray(tri, dtype=np.float32))
-        # Embree commits lazily on the first query; do it now, single-threaded, so that
-        # concurrent first queries from the pool never race on the commit.
-        self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), query="OCCLUDED")
+        if alpha is not None and not isinstance(alpha, TriangleAlpha):
+            raise ValueError(f"alpha must be a vobscure.raytrace.TriangleAlpha or None, got {type(alpha).__name__}")
+        if alpha is not None and len(alpha.mask) != len(tri):
+            raise ValueError(f"alpha describes {len(alpha.mask)} triangles; the tracer has {len(tri)}")
+        #: the alpha test of the triangles (None: all opaque)
+        self.alpha = alpha if alpha is not None and alpha.masked.any() else None
+        #: Embree scene of the opaque triangles (all of them without alpha); None if there are none
+        self._scene = None
+        #: Embree scene of the alpha-tested triangles; None without alpha
+        self._masked = None
+        if self.alpha is None:
+            self._scene = _embree_scene(tri)
+            return
+        masked = self.alpha.masked
+        self._opaque_ids = np.flatnonzero(~masked)
+        self._masked_ids = np.flatnonzero(masked)
+        if len(self._opaque_ids):
+            self._scene = _embree_scene(tri[self._opaque_ids])
+        self._masked = _embree_scene(tri[self._masked_ids])
+        self._masked_normals = self.face_normals[self._masked_ids]
+        self._masked_planes = np.einsum("ij,ij->i", self._masked_normals, tri[self._masked_ids, 0])
+        #: passes of the alpha loop after which a ray that is still going is an error: every
+        #: pass crosses one masked triangle (the restart is off its plane), so a ray that
+        #: needs more passes than there are masked triangles is caught in a cycle
+        self._max_passes = len(self._masked_ids) + 2
 
     @property
     def embree_scene(self):
-        """The underlying ``embreex.rtcore_scene.EmbreeScene`` (for benchmarks)."""
+        """The underlying ``embreex.rtcore_scene.EmbreeScene`` (for benchmarks): of the opaque
+        triangles when the tracer has alpha-tested ones."""
         return self._scene
 
     # -- ray-origin policy -------------------------------------------------------------
@@ -250,8 +466,12 @@ class Tracer:
             return out
         threads, chunks = self._chunks(len(o), threads)
 
-        def work(s):
-            out[s] = self._scene.run(o[s], d[s], dists=self._tfar(tfar, s), query="OCCLUDED") != -1
+        if self._masked is not None:
+            def work(s):
+                out[s] = self._occluded_alpha(o[s], d[s], tfar if isinstance(tfar, float) else tfar[s])
+        else:
+            def work(s):
+                out[s] = self._scene.run(o[s], d[s], dists=self._tfar(tfar, s), query="OCCLUDED") != -1
 
         self._run(work, chunks, threads)
         return out
@@ -267,6 +487,10 @@ class Tracer:
             threads, chunks = self._chunks(n, threads)
 
             def work(s):
+                if self._masked is not None:
+                    dist[s], prim[s], bary[s] = self._intersect_alpha(
+                        o[s], d[s], tfar if isinstance(tfar, float) else tfar[s])
+                    return
                 res = self._scene.run(o[s], d[s], dists=self._tfar(tfar, s), output=1)
                 p = res["primID"]
                 miss = p < 0  # embreex reports -1 (RTC_INVALID_GEOMETRY_ID) for a miss
@@ -281,6 +505,111 @@ class Tracer:
 
             self._run(work, chunks, threads)
         return Hits(distance=dist, primitive=prim, barycentric=bary)
+
+    # -- alpha-tested triangles ----------------------------------------------------------
+    def _occluded_alpha(self, o, d, tfar) -> np.ndarray:
+        """occluded() of one chunk: opaque scene, then the alpha loop for the rays still free."""
+        n = len(o)
+        if self._scene is not None:
+            blocked = self._scene.run(o, d, dists=self._tfar_copy(tfar, n), query="OCCLUDED") != -1
+        else:
+            blocked = np.zeros(n, dtype=bool)
+        # only rays that meet a masked triangle at all need the alpha test
+        free = np.flatnonzero(~blocked)
+        if len(free):
+            near = self._masked.run(o[free], d[free], dists=self._tfar_copy(tfar, n, free), query="OCCLUDED") != -1
+            free = free[near]
+        if len(free):
+            limit = np.broadcast_to(np.float64(tfar), (n,))[free] if isinstance(tfar, float) else tfar[free]
+            _, prim, _ = self._masked_first(o[free], d[free], limit)
+            blocked[free] = prim >= 0
+        return blocked
+
+    def _intersect_alpha(self, o, d, tfar):
+        """intersect() of one chunk: the nearer of the opaque hit and the first solid masked hit."""
+        n = len(o)
+        dist = np.full(n, np.inf)
+        prim = np.full(n, -1, dtype=np.int64)
+        bary = np.zeros((n, 2))
+        if self._scene is not None:
+            res = self._scene.run(o, d, dists=self._tfar_copy(tfar, n), output=1)
+            hit = res["primID"] >= 0
+            prim[hit] = self._opaque_ids[res["primID"][hit]]
+            dist[hit] = res["tfar"][hit]
+            bary[hit, 0] = res["u"][hit]
+            bary[hit, 1] = res["v"][hit]
+        # a masked hit counts only in front of the opaque one
+        limit = np.minimum(np.float64(tfar) if isinstance(tfar, float) else tfar.astype(np.float64), dist)
+        m_dist, m_prim, m_bary = self._masked_first(o, d, limit)
+        nearer = m_prim >= 0
+        dist[nearer], prim[nearer], bary[nearer] = m_dist[nearer], m_prim[nearer], m_bary[nearer]
+        return dist, prim, bary
+
+    @staticmethod
+    def _tfar_copy(tfar, n, rows=None):
+        if isinstance(tfar, float):
+            return tfar
+        return (tfar if rows is None else tfar[rows]).astype(np.float32)
+
+    def _masked_first(self, o, d, limit):
+        """First solid hit on the masked triangles within ``limit`` (ray parameter), in passes.
+
+        o, d : (n, 3) float32 rays; limit : (n,) float. Returns (distance (n,) float64, inf on a
+        miss; primitive (n,) int64 into the full triangle array, -1 on a miss; barycentric (n, 2)).
+        The rays still going are kept compact: each pass works on them alone.
+        """
+        n = len(o)
+        dist = np.full(n, np.inf)
+        prim = np.full(n, -1, dtype=np.int64)
+        bary = np.zeros((n, 2))
+        limit = np.asarray(limit, dtype=np.float64)
+        ray = np.flatnonzero(limit > 0)                  # which input ray each active row is
+        org, dirs, lim = o[ray], d[ray], limit[ray]
+        start = np.zeros(len(ray))                       # ray parameter of the current origin
+        alpha, normals, planes = self.alpha, self._masked_normals, self._masked_planes
+        for _ in range(self._max_passes):
+            if not len(ray):
+                return dist, prim, bary
+            res = self._masked.run(org, dirs, dists=(lim - start).astype(np.float32), output=1)
+            local = res["primID"]
+            hit = local >= 0
+            t, b1, b2 = res["tfar"], res["u"], res["v"]
+            if not hit.all():
+                ray, org, dirs, lim, start = ray[hit], org[hit], dirs[hit], lim[hit], start[hit]
+                local, t, b1, b2 = local[hit], t[hit], b1[hit], b2[hit]
+            solid = alpha._solid_local(local, b1, b2)
+            done = ray[solid]
+            dist[done] = start[solid] + t[solid]
+            prim[done] = self._masked_ids[local[solid]]
+            bary[done, 0] = b1[solid]
+            bary[done, 1] = b2[solid]
+            # rejected hits: start again just beyond the hole, off the far side of its triangle
+            rej = ~solid
+            ray, org, dirs, lim, start, local = ray[rej], org[rej], dirs[rej], lim[rej], start[rej], local[rej]
+            org64, d64 = org.astype(np.float64), dirs.astype(np.float64)
+            dd = np.einsum("ij,ij->i", d64, d64)
+            unit = d64 / np.sqrt(dd)[:, None]
+            n_f = normals[local]
+            cos = np.einsum("ij,ij->i", n_f, unit)
+            side = np.where(cos >= 0.0, 1.0, -1.0)
+            q = org64 + t[rej, None] * d64                   # the hit, on the ray's line
+            past = side * (np.einsum("ij,ij->i", n_f, q) - planes[local])   # how far beyond the plane
+            # Stay on the ray's line, at `offset` beyond the plane; a ray within COS_GRAZING of
+            # the plane steps `offset` along itself and `offset` off the plane instead.
+            graze = np.abs(cos) < COS_GRAZING
+            step = np.where(graze, self.offset, (self.offset - past) / np.maximum(np.abs(cos), COS_GRAZING))
+            moved = q + step[:, None] * unit
+            moved[graze] += self.offset * side[graze, None] * n_f[graze]
+            start = start + np.einsum("ij,ij->i", moved - org64, d64) / dd
+            org = moved.astype(np.float32)
+            going = start < lim
+            if not going.all():
+                ray, org, dirs, lim, start = ray[going], org[going], dirs[going], lim[going], start[going]
+        if len(ray):
+            raise RuntimeError(f"the alpha test of {len(ray)} ray(s) did not finish after {self._max_passes} "
+                               f"passes over {len(self._masked_ids)} masked triangles; the masked geometry "
+                               "sends rays around a cycle (please report the scene)")
+        return dist, prim, bary
 
     def hit_points(self, hits: Hits) -> np.ndarray:
         """(n, 3) float64 hit positions rebuilt from barycentrics (NaN on a miss).
@@ -304,3 +633,15 @@ class Tracer:
         else:
             # list() propagates the first exception raised in a worker
             list(_pool(threads).map(work, chunks))
+
+
+def _embree_scene(tri: np.ndarray):
+    """A committed ``embreex`` scene of (m, 3, 3) triangles."""
+    from embreex import mesh_construction, rtcore_scene
+
+    scene = rtcore_scene.EmbreeScene()
+    mesh_construction.TriangleMesh(scene, np.ascontiguousarray(tri, dtype=np.float32))
+    # Embree commits lazily on the first query; do it now, single-threaded, so that
+    # concurrent first queries from the pool never race on the commit.
+    scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), query="OCCLUDED")
+    return scene

@@ -185,8 +185,8 @@ def array_digest(*arrays) -> str:
 
 def scene_digest(scene) -> str:
     """SHA-256 (hex) of a scene's geometry: every mesh's name, vertices, faces and smoothing
-    angle (which decides its shading normals). The scene's name and suggested view are not
-    part of it.
+    angle (which decides its shading normals), and the alpha test of alpha-tested meshes.
+    The scene's name and suggested view are not part of it.
 
     Examples
     --------
@@ -202,6 +202,9 @@ def scene_digest(scene) -> str:
         h.update(json.dumps([name, scene.smooth_angle.get(name)]).encode())
         h.update(array_digest(np.asarray(mesh.vertices, dtype=np.float64),
                               np.asarray(mesh.faces, dtype=np.int64)).encode())
+    for name, mask in scene.alpha.items():   # alpha-tested meshes: their holes change every ray
+        h.update(json.dumps(["alpha", name, mask.cutoff]).encode())
+        h.update(array_digest(mask.uv, mask.texture).encode())
     return h.hexdigest()
 
 

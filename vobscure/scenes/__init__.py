@@ -8,17 +8,18 @@ from ._alpha import AlphaMask
 from .atrium import atrium
 from ._resolve import as_scene, check_spec, resolve
 from ._scene import Scene
-from .io import DegenerateFacesWarning, load
+from .io import AlphaWarning, DegenerateFacesWarning, load
 from .procedural import blob, cornell_box, crease, get, groove, names, slab, sphere_on_plane, steps
 from .vegetation import grass, leaf_cloud, leaf_cloud_dense, leaf_points, tree, tree_poplar
 
-# every public name of the submodules, but of io only the loader and its warning
+# every public name of the submodules, but of io only the loader and its warnings
 __all__ = [
     *_scene.__all__,
     *_alpha.__all__,
     *_resolve.__all__,
     "load",
     "DegenerateFacesWarning",
+    "AlphaWarning",
     *procedural.__all__,
     *vegetation.__all__,
     "atrium",

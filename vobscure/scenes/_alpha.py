@@ -67,3 +67,43 @@ class AlphaMask:
 
     def _where(self) -> str:
         return f" ({self.source})" if self.source else ""
+
+    @property
+    def holes(self) -> np.ndarray:
+        """(h, w) bool: the texels that are holes, ``alpha < cutoff`` (compared in float64)."""
+        return self.texture.astype(np.float64) < self.cutoff
+
+    @property
+    def has_holes(self) -> bool:
+        """Whether any texel is a hole (a mask without holes is an opaque mesh)."""
+        return bool(np.any(self.holes))
+
+    def __repr__(self) -> str:
+        h, w = self.texture.shape
+        holes = float(np.mean(self.holes))
+        source = f", source={self.source!r}" if self.source else ""
+        return (f"AlphaMask(faces={len(self.uv)}, texture={h}x{w}, cutoff={self.cutoff:g}, "
+                f"hole_texels={holes:.1%}{source})")
+
+    def lookup(self, uv) -> np.ndarray:
+        """Alpha at texture coordinates ``uv`` (..., 2): the texel that contains each one
+        (nearest, coordinates repeat), as the tracer's alpha test reads it
+        (:func:`vobscure.raytrace.texel_lookup`).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = AlphaMask(np.zeros((1, 3, 2)), [[0.0, 1.0], [1.0, 1.0]])   # top-left texel a hole
+        >>> m.lookup([[0.25, 0.75], [0.75, 0.75], [1.25, -0.25]]).tolist()
+        [0.0, 1.0, 0.0]
+        >>> m
+        AlphaMask(faces=1, texture=2x2, cutoff=0.5, hole_texels=25.0%)
+        """
+        from ..raytrace import texel_lookup
+
+        return texel_lookup(self.texture, uv)
+
+    def solid(self, uv) -> np.ndarray:
+        """(...,) bool: whether the texel at each texture coordinate is solid
+        (``alpha >= cutoff``, glTF 2.0 ``alphaCutoff`` semantics)."""
+        return self.lookup(uv).astype(np.float64) >= self.cutoff

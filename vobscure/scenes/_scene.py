@@ -124,8 +124,9 @@ class Scene:
         self.alpha: dict[str, AlphaMask] = _check_alpha(alpha, clean)
 
     def __repr__(self) -> str:
+        masked = f", alpha={list(self.alpha)}" if self.alpha else ""
         return (f"Scene({self.name!r}, meshes={list(self.meshes)}, triangles={len(self.triangles)}, "
-                f"extent={self.extent:.4g})")
+                f"extent={self.extent:.4g}{masked})")
 
     @property
     def center(self) -> np.ndarray:
@@ -134,15 +135,51 @@ class Scene:
 
     @cached_property
     def is_watertight(self) -> bool:
-        """True when every mesh is closed and consistently wound (inside/outside defined)."""
-        return all(m.is_watertight and m.is_winding_consistent for m in self.meshes.values())
+        """True when every mesh is closed and consistently wound (inside/outside defined):
+        :attr:`open_meshes` is empty."""
+        return not self.open_meshes
+
+    @cached_property
+    def open_meshes(self) -> list[str]:
+        """Names of the meshes that do not bound a solid: not closed, not consistently wound,
+        or alpha-tested with holes (texels below the cutoff), which open a closed mesh."""
+        return [k for k, m in self.meshes.items()
+                if not (m.is_watertight and m.is_winding_consistent)
+                or (k in self.alpha and self.alpha[k].has_holes)]
 
     @cached_property
     def tracer(self):
-        """The Embree scene of these triangles, built once on first use."""
+        """The Embree scene of these triangles, built once on first use; alpha-tested meshes
+        (:attr:`alpha`) are traced with their holes (:attr:`triangle_alpha`)."""
         from ..raytrace import Tracer
 
-        return Tracer(self.triangles, face_normals=self.face_normals, extent=self.extent)
+        return Tracer(self.triangles, face_normals=self.face_normals, extent=self.extent,
+                      alpha=self.triangle_alpha)
+
+    @cached_property
+    def triangle_alpha(self):
+        """The alpha test per triangle of :attr:`triangles` (a
+        :class:`vobscure.raytrace.TriangleAlpha`: texture index per triangle, -1 opaque, the
+        masks' corner texture coordinates, textures and cutoffs), or None when no mesh has an
+        :class:`AlphaMask` with a hole (a mask whose texels are all solid is opaque)."""
+        holed = {k: a for k, a in self.alpha.items() if a.has_holes}
+        if not holed:
+            return None
+        from ..raytrace import TriangleAlpha
+
+        names = list(self.meshes)
+        first = np.concatenate([[0], np.cumsum([len(m.faces) for m in self.meshes.values()])])
+        mask = np.full(len(self.triangles), -1, dtype=np.int64)
+        uv = np.zeros((len(self.triangles), 3, 2))
+        textures, cutoffs = [], []
+        for i, (key, alpha) in enumerate(holed.items()):
+            j = names.index(key)
+            rows = slice(int(first[j]), int(first[j + 1]))
+            mask[rows] = i
+            uv[rows] = alpha.uv
+            textures.append(alpha.texture)
+            cutoffs.append(alpha.cutoff)
+        return TriangleAlpha(mask, uv, textures, cutoffs)
 
     @property
     def view(self) -> dict:

@@ -1,19 +1,24 @@
-"""Load triangle meshes from OBJ, PLY, STL, GLB and glTF files into a :class:`Scene`."""
+"""Load triangle meshes from OBJ, PLY, STL, GLB and glTF files into a :class:`Scene`, with the
+alpha tests of their materials (read in :mod:`vobscure.scenes._materials`)."""
 
 from __future__ import annotations
 
 import numbers
 import os
+import re
 import warnings
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
+from . import _materials
+from ._alpha import AlphaMask
+from ._materials import AlphaWarning
 from ._scene import Scene
 from .viewpoint import file_view
 
-__all__ = ["load", "DegenerateFacesWarning", "SUPPORTED_EXTENSIONS"]
+__all__ = ["load", "DegenerateFacesWarning", "AlphaWarning", "SUPPORTED_EXTENSIONS"]
 
 #: File extensions :func:`load` reads (case-insensitive).
 SUPPORTED_EXTENSIONS = (".obj", ".ply", ".stl", ".glb", ".gltf")
@@ -27,7 +32,7 @@ class DegenerateFacesWarning(UserWarning):
     """Emitted by :func:`load` when it drops zero-area faces; the message gives the count."""
 
 
-def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
+def load(path, *, name: str | None = None, smooth_angle: float = 60.0, alpha: bool = True) -> Scene:
     """Read a mesh file into a :class:`Scene`, one named mesh per object of the file.
 
     Parameters
@@ -39,6 +44,12 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
     smooth_angle : float, optional
         Crease angle in degrees (0 to 180) of the shading normals of every mesh; 0 gives
         flat shading. See :class:`Scene`.
+    alpha : bool, optional
+        Read the alpha tests of the materials (default): OBJ/MTL ``d``, ``Tr``, ``map_d`` and
+        the alpha channel of ``map_Kd``; glTF ``alphaMode`` ``MASK`` (and ``BLEND``, read as
+        a mask at 0.5) with ``alphaCutoff`` and the base colour's alpha. Texels below the
+        cutoff are holes for every ray (:class:`AlphaMask`, ``docs/alpha.md``). False loads
+        every mesh solid (said once in an :class:`AlphaWarning` when the file has alpha).
 
     Returns
     -------
@@ -46,7 +57,10 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
         A file that holds one object gives one mesh named after the file's stem. A file
         that holds several (the groups ``g`` and objects ``o`` of an OBJ file, the nodes of
         a glTF scene) gives one mesh per object, named after it, with its scene-graph
-        transform applied.
+        transform applied. A mesh whose faces use several materials, some of them alpha
+        tested, is split: the opaque faces keep the mesh's name, the faces of each
+        alpha-tested material become the mesh ``"<name>/<material>"``. :attr:`Scene.alpha`
+        holds the alpha tests.
 
     Raises
     ------
@@ -61,13 +75,22 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
     DegenerateFacesWarning
         When degenerate faces (zero area: a repeated vertex, or a height below 1e-12 of the
         face's longest edge) were dropped; the message says how many.
+    AlphaWarning
+        Naming the file, material and meshes, for any part of a material's alpha that
+        cannot be honoured (a texture that is missing or cannot be read, texture coordinates
+        missing where a texture is to be read, a texture transform, a texture coordinate set
+        other than 0, an unsupported MTL texture option): those faces are loaded solid. Also
+        for readings beyond the format's specification (glTF BLEND and a partial MTL dissolve
+        read as a mask at 0.5, alpha from a ``map_Kd`` image, ``Tr`` that makes a material a
+        hole), and for ``alpha=False`` on a file with alpha.
 
     Notes
     -----
     The file is read with ``trimesh.load(..., process=False)`` so that NaN or inf
     coordinates are seen (trimesh's processing would silently drop them) and then
     rebuilt from positions alone: texture coordinates, normals and materials are
-    discarded, and vertices with exactly equal positions are merged. Merging only exact
+    discarded (except the texture coordinates of alpha-tested faces, corner by corner), and
+    vertices with exactly equal positions are merged. Merging only exact
     duplicates needs no absolute tolerance, so the result does not depend on the file's
     units, and it closes the texture seams that OBJ files split vertices along (spot.obj
     is watertight only after this). Meshes that are not closed load fine;
@@ -102,6 +125,8 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
                          f"supported: {', '.join(SUPPORTED_EXTENSIONS)}")
     if path.stat().st_size == 0:
         raise ValueError(f"{path} is empty: it holds no triangles")
+    if not isinstance(alpha, bool):
+        raise ValueError(f"alpha must be True or False, got {alpha!r}")
 
     options = {}
     if ext == ".obj":
@@ -116,15 +141,25 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
     if not parts:
         raise ValueError(f"{path} holds no triangles")
 
-    meshes = {}
-    dropped = {}
-    total = 0
-    for part_name, vertices, faces in parts:
+    for part_name, vertices, _, _ in parts:
         bad = int(np.count_nonzero(~np.isfinite(vertices)))
         if bad:
             where = "" if len(parts) == 1 else f" (mesh {part_name!r})"
             raise ValueError(f"{path}{where} has {bad} NaN or inf vertex coordinate(s); "
                              "fix or remove those vertices in the file")
+    notes = _Notes(path.name)
+    if alpha:
+        face_alpha = _face_alpha(path, ext, parts, notes)
+    else:
+        face_alpha = [None] * len(parts)
+        if _has_alpha(path, ext):
+            notes.add("alpha=False: every material is loaded solid, although the file has alpha-tested "
+                      "materials", "", [])
+
+    meshes, masks = {}, {}
+    dropped = {}
+    total = 0
+    for (part_name, vertices, faces, _), fa in zip(parts, face_alpha):
         total += len(faces)
         vertices, faces = _merge_exact(vertices, faces)
         keep = ~_degenerate(vertices, faces)
@@ -133,8 +168,26 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
             faces = faces[keep]
         if len(faces) == 0:
             continue
-        used, faces = np.unique(faces, return_inverse=True)
-        meshes[part_name] = trimesh.Trimesh(vertices[used], faces.reshape(-1, 3), process=False)
+        if fa is None:
+            meshes[part_name] = _compact(vertices, faces)
+            continue
+        # the faces of each alpha-tested material become a mesh of their own
+        material, uv, table = fa[0][keep], fa[1][keep], fa[2]
+        present = np.unique(material)
+        for k in present:
+            rows = material == k
+            mesh_name = part_name if len(present) == 1 or k < 0 else f"{part_name}/{table[k].name}"
+            unique = mesh_name
+            i = 1
+            while unique in meshes:
+                unique = f"{mesh_name}_{i}"
+                i += 1
+            meshes[unique] = _compact(vertices, faces[rows])
+            if k >= 0:
+                m = table[k]
+                masks[unique] = AlphaMask(uv[rows], m.alpha, cutoff=m.cutoff,
+                                          source=f"{path.name}, material {m.name!r}")
+    notes.emit()
     if dropped:
         count = sum(dropped.values())
         detail = "" if len(parts) == 1 else " (" + ", ".join(f"{k}: {v}" for k, v in dropped.items()) + ")"
@@ -143,11 +196,195 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0) -> Scene:
     if not meshes:
         raise ValueError(f"{path} holds no triangles with a non-zero area")
     return Scene(meshes, name=name if name is not None else path.stem,
-                 smooth_angle=float(smooth_angle), **file_view(path, meshes))
+                 smooth_angle=float(smooth_angle), alpha=masks, **file_view(path, meshes))
 
 
-def _parts(loaded, stem: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """(name, vertices (n, 3) float64 in world space, faces (m, 3) int64) per triangle mesh.
+def _compact(vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
+    """A Trimesh of ``faces`` (same order) over the vertices they use."""
+    used, faces = np.unique(faces, return_inverse=True)
+    return trimesh.Trimesh(vertices[used], faces.reshape(-1, 3), process=False)
+
+
+class _Notes:
+    """The AlphaWarnings of one load, gathered: one per message, naming each material it is
+    about with its meshes."""
+
+    def __init__(self, file: str):
+        self.file = file
+        self.items: dict[str, dict[str, list[str]]] = {}
+
+    def add(self, message: str, material: str, meshes) -> None:
+        listed = self.items.setdefault(message, {}).setdefault(material, [])
+        listed.extend(m for m in meshes if m not in listed)
+
+    def emit(self) -> None:
+        for message, materials in self.items.items():
+            about = []
+            for material, meshes in materials.items():
+                if not material:
+                    continue
+                label = f"material {material!r}"
+                if meshes:
+                    label += f" (mesh{'es' if len(meshes) > 1 else ''} {', '.join(map(repr, meshes))})"
+                about.append(label)
+            where = (", " + ", ".join(about)) if about else ""
+            warnings.warn(f"{self.file}{where}: {message}", AlphaWarning, stacklevel=3)
+
+
+def _has_alpha(path: Path, ext: str) -> bool:
+    """Whether the file has materials with an alpha test (without reading any image)."""
+    try:
+        if ext == ".obj":
+            return bool(_materials.mtl_materials(path, read_images=False))
+        if ext in (".gltf", ".glb"):
+            return any(m["mode"] in ("MASK", "BLEND") for m in _materials.gltf_materials(path))
+    except Exception:  # an unreadable material section: trimesh read the geometry anyway
+        return False
+    return False
+
+
+def _face_alpha(path: Path, ext: str, parts, notes: _Notes) -> list:
+    """Per part: None (opaque) or (material (f,) int, -1 opaque; uv (f, 3, 2); [MaterialAlpha])."""
+    if ext == ".obj":
+        return _obj_face_alpha(path, parts, notes)
+    if ext in (".gltf", ".glb"):
+        return _gltf_face_alpha(path, parts, notes)
+    return [None] * len(parts)
+
+
+def _usable(material, meshes, notes: _Notes) -> bool:
+    """Whether a material's alpha is honoured and has holes (problems and remarks go to ``notes``)."""
+    for remark in material.notes:
+        notes.add(remark, material.name, meshes)
+    if material.problem is not None:
+        notes.add(f"{material.problem}; loaded solid", material.name, meshes)
+        return False
+    return material.is_masked
+
+
+def _corner_uv(geometry, faces):
+    """(f, 3, 2) texture coordinates of the faces' corners, or None when the mesh has none."""
+    uv = getattr(getattr(geometry, "visual", None), "uv", None)
+    if uv is None or len(uv) != len(geometry.vertices) or not np.all(np.isfinite(uv)):
+        return None
+    return np.asarray(uv, dtype=np.float64)[faces]
+
+
+def _face_keys(triangles: np.ndarray) -> list[bytes]:
+    """One bytes key per (3, 3) triangle: its corner coordinates, exactly (-0.0 as 0.0)."""
+    flat = np.ascontiguousarray(triangles.reshape(-1, 9) + 0.0, dtype=np.float64)
+    return [row.tobytes() for row in flat]
+
+
+def _obj_face_alpha(path: Path, parts, notes: _Notes) -> list:
+    for library in _materials.mtl_libraries(path):
+        if not library.is_file():
+            notes.add(f"its material library {library.name!r} is not found (looked for {library}); the "
+                      "alpha of its materials is not read and every mesh is loaded solid", "", [])
+    table = _materials.mtl_materials(path)
+    if not table:
+        return [None] * len(parts)
+    # The parts hold one mesh per object/group whatever its materials: read the file again,
+    # split by material as well, and find each face's material and corner texture
+    # coordinates by its corner positions (the same numbers, parsed from the same text).
+    text = path.read_text(errors="replace")
+    used = set(re.findall(r"^[ \t]*usemtl[ \t]+(.+?)[ \t]*$", text, flags=re.MULTILINE))
+    by_material = trimesh.load(str(path), file_type="obj", process=False, split_objects=True,
+                               split_groups=True, group_material=True)
+    geometries = list(by_material.geometry.values()) if isinstance(by_material, trimesh.Scene) else [by_material]
+    names = list(table)
+    lookup: dict[bytes, tuple[int, np.ndarray | None]] = {}
+    seen = set()
+    for g in geometries:
+        if not isinstance(g, trimesh.Trimesh) or len(g.faces) == 0:
+            continue
+        mname = getattr(getattr(getattr(g, "visual", None), "material", None), "name", None)
+        if mname not in table:
+            continue
+        seen.add(mname)
+        faces = np.asarray(g.faces, dtype=np.int64)
+        uv = _corner_uv(g, faces)
+        k = names.index(mname)
+        for i, key in enumerate(_face_keys(np.asarray(g.vertices, dtype=np.float64)[faces])):
+            lookup.setdefault(key, (k, None if uv is None else uv[i]))
+    for mname in table:
+        if mname in used and mname not in seen:
+            notes.add("trimesh attributed no faces to this material (it reads the first mtllib only); "
+                      "its faces are loaded solid", mname, [])
+    found_per_part, users = [], {}
+    for part_name, vertices, faces, _ in parts:
+        found = [lookup.get(key) for key in _face_keys(vertices[faces])]
+        found_per_part.append(found)
+        for f in found:
+            if f is not None and part_name not in users.setdefault(f[0], []):
+                users[f[0]].append(part_name)
+    usable = {k: _usable(table[names[k]], meshes, notes) for k, meshes in users.items()}
+    out = []
+    for (part_name, _, faces, _), found in zip(parts, found_per_part):
+        material = np.full(len(faces), -1, dtype=np.int64)
+        uv = np.zeros((len(faces), 3, 2))
+        for i, f in enumerate(found):
+            if f is None or not usable[f[0]]:
+                continue
+            k, corner_uv = f
+            if corner_uv is None and table[names[k]].texture is not None:
+                notes.add("faces without texture coordinates (vt) to read its alpha texture with are "
+                          "loaded solid", names[k], [part_name])
+                continue
+            material[i] = k
+            if corner_uv is not None:
+                uv[i] = corner_uv
+        out.append(None if np.all(material < 0) else (material, uv, [table[n] for n in names]))
+    return out
+
+
+def _gltf_face_alpha(path: Path, parts, notes: _Notes) -> list:
+    try:
+        info = _materials.gltf_materials(path)
+    except Exception as exc:  # trimesh read the geometry; the material section is unreadable
+        notes.add(f"its materials could not be read ({type(exc).__name__}: {exc}); every mesh is loaded solid",
+                  "", [])
+        return [None] * len(parts)
+    if not any(m["mode"] in ("MASK", "BLEND") for m in info):
+        return [None] * len(parts)
+    out = []
+    matched = set()
+    for part_name, _, faces, geometry in parts:
+        pbr = getattr(getattr(geometry, "visual", None), "material", None)
+        if pbr is None or str(getattr(pbr, "alphaMode", None) or "OPAQUE").upper() not in ("MASK", "BLEND"):
+            out.append(None)
+            continue
+        entry = _materials.match_gltf_material(info, pbr)
+        if entry is None:
+            notes.add("the material cannot be told apart from others of the same name with other alpha "
+                      "settings; loaded solid", str(getattr(pbr, "name", "")), [part_name])
+            out.append(None)
+            continue
+        matched.add(id(entry))
+        material = _materials.gltf_material(entry, pbr)
+        if material is None or not _usable(material, [part_name], notes):
+            out.append(None)
+            continue
+        uv = np.zeros((len(faces), 3, 2))
+        if material.texture is not None:
+            uv = _corner_uv(geometry, faces)
+            if uv is None:
+                notes.add("the mesh has no TEXCOORD_0 to read its base colour texture with; loaded solid",
+                          material.name, [part_name])
+                out.append(None)
+                continue
+        out.append((np.zeros(len(faces), dtype=np.int64), uv, [material]))
+    for m in info:
+        if m["mode"] in ("MASK", "BLEND") and m["meshes"] and id(m) not in matched:
+            notes.add(f"alphaMode {m['mode']}, but trimesh attached the material to no mesh it loaded; its "
+                      "meshes are loaded solid", m["name"], m["meshes"])
+    return out
+
+
+def _parts(loaded, stem: str) -> list[tuple[str, np.ndarray, np.ndarray, trimesh.Trimesh]]:
+    """(name, vertices (n, 3) float64 in world space, faces (m, 3) int64, the trimesh geometry)
+    per triangle mesh. The faces index the geometry's vertices, reversed where a mirroring
+    transform turned the winding inside out (their corners' texture coordinates follow).
 
     A Trimesh is one part named ``stem``; a trimesh.Scene gives one part per scene-graph
     node that instances a triangle mesh, named after the node (``stem`` when there is only
@@ -183,7 +420,7 @@ def _parts(loaded, stem: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
             vertices = vertices @ linear.T + transform[:3, 3]
             if np.linalg.det(linear) < 0:  # a mirroring transform turns the winding inside out
                 faces = faces[:, ::-1]
-        parts.append((unique, vertices, faces))
+        parts.append((unique, vertices, faces, geometry))
     return parts
 
 
