@@ -436,7 +436,7 @@ def obscurance(scene, points, normals, *, radius: float, falloff="linear", rays:
 def _check_closed(scene: Scene, allow_open: bool) -> None:
     if allow_open or scene.is_watertight:
         return
-    bad = [k for k, m in scene.meshes.items() if not (m.is_watertight and m.is_winding_consistent)]
+    bad = scene.open_meshes
     raise ValueError(
         f"volumetric obscurance needs closed, consistently wound meshes to tell inside from outside; "
         f"mesh(es) {bad} are not. Repair them (e.g. trimesh.repair.fill_holes) or pass "

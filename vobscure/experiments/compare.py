@@ -151,9 +151,9 @@ def _as_cache(cache):
 
 
 def open_meshes(scene) -> list[str]:
-    """The names of the scene's meshes that are not closed and consistently wound (an inside
-    test cannot be made against them)."""
-    return [k for k, m in scene.meshes.items() if not (m.is_watertight and m.is_winding_consistent)]
+    """The names of the scene's meshes that bound no solid (:attr:`vobscure.scenes.Scene.open_meshes`:
+    not closed, not consistently wound, or alpha-tested with holes)."""
+    return list(scene.open_meshes)
 
 
 def _names(items, limit: int = 6) -> str:
@@ -171,13 +171,14 @@ def missing_note(missing: dict, scene, thickness=None) -> str:
     --------
     >>> import vobscure as vo
     >>> print(missing_note({"volumetric": None}, vo.scenes.leaf_cloud()))  # doctest: +ELLIPSIS
-    No 'volumetric' reference: it tells solid from empty space by an inside test, which needs closed meshes, and 1 of 1 mesh(es) are open (leaves).
+    No 'volumetric' reference: it tells solid from empty space by an inside test, which needs closed meshes, and 1 of 1 mesh(es) are open or alpha-tested with holes (leaves).
     """
     bad = open_meshes(scene)
     parts = []
     for name, stand in missing.items():
         why = (f"No {name!r} reference: it tells solid from empty space by an inside test, which needs closed "
-               f"meshes, and {len(bad)} of {len(scene.meshes)} mesh(es) are open ({_names(bad)}).")
+               f"meshes, and {len(bad)} of {len(scene.meshes)} mesh(es) are open or alpha-tested with holes "
+               f"({_names(bad)}).")
         if stand == "shell":
             t = (f"{_references.SHELL_THICKNESS:g} x the radius thick in view depth (--thickness sets it)"
                  if thickness is None else f"{thickness:.4g} thick in view depth (--thickness)")
