@@ -482,7 +482,7 @@ def test_round_trip(tmp_path, ext, builder):
     mesh = original.meshes[builder]
     path = tmp_path / f"solid{ext}"
     mesh.export(path)
-    scene = load(path)
+    scene = scenes.load(path)
     assert list(scene.meshes) == ["solid"]
     loaded = scene.meshes["solid"]
     assert len(loaded.faces) == len(mesh.faces)
@@ -518,7 +518,7 @@ def test_mirroring_transform_keeps_outward_normals(tmp_path):
     graph.add_geometry(trimesh.creation.box(), node_name="b", transform=mirror)
     path = tmp_path / "mirror.glb"
     graph.export(path)
-    scene = load(path)
+    scene = scenes.load(path)
     assert set(scene.meshes) == {"a", "b"}
     assert scene.meshes["b"].volume == pytest.approx(1.0, rel=FLOAT32_RTOL)
     assert scene.meshes["b"].bounds[0, 0] == pytest.approx(-3.5)
@@ -532,7 +532,7 @@ def test_obj_groups_become_named_meshes(tmp_path):
     lines += ["g left"] + [f"f {i + 1} {j + 1} {k + 1}" for i, j, k in a.faces]
     lines += ["g right"] + [f"f {i + 9} {j + 9} {k + 9}" for i, j, k in a.faces]
     path.write_text("\n".join(lines) + "\n")
-    scene = load(path)
+    scene = scenes.load(path)
     assert set(scene.meshes) == {"left", "right"}
     assert scene.is_watertight
     assert scene.meshes["right"].bounds[0, 0] == pytest.approx(1.5)
@@ -616,7 +616,7 @@ def test_load_keeps_open_meshes(tmp_path):
                                process=False)
     path = tmp_path / "open.ply"
     open_box.export(path)
-    scene = load(path)
+    scene = scenes.load(path)
     assert len(scene.triangles) == 10
     assert not scene.is_watertight
 
@@ -723,3 +723,22 @@ def test_check_spec_validates_without_building(tmp_path, monkeypatch):
         scenes.check_spec(tmp_path / "notes.txt", exists=False)
     with pytest.raises(ValueError, match="cornell_box"):
         scenes.check_spec("nowhere")
+
+
+def test_obj_relative_indices_refer_to_the_vertices_defined_so_far(tmp_path):
+    # two quads, each written after its own four vertices with indices -4..-1: the second
+    # must use vertices 5-8, not the file's last four (the reading trimesh gives on its own)
+    text = ("o low\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf -4 -3 -2 -1\n"
+            "o high\nv 0 2 0\nv 1 2 0\nv 1 2 1\nv 0 2 1\nf -4 -3 -2 -1\n")
+    path = tmp_path / "relative.obj"
+    path.write_text(text)
+    scene = scenes.load(path)
+    assert sorted(scene.meshes) == ["high", "low"]
+    assert np.all(scene.meshes["low"].vertices[:, 1] == 0.0)
+    assert np.all(scene.meshes["high"].vertices[:, 1] == 2.0)
+    absolute = tmp_path / "absolute.obj"
+    absolute.write_text(text.replace("f -4 -3 -2 -1\no high", "f 1 2 3 4\no high").replace(
+        "v 0 2 1\nf -4 -3 -2 -1", "v 0 2 1\nf 5 6 7 8"))
+    same = scenes.load(absolute)
+    for name in ("low", "high"):
+        np.testing.assert_array_equal(scene.meshes[name].triangles, same.meshes[name].triangles)

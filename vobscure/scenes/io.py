@@ -3,6 +3,7 @@ alpha tests of their materials (read in :mod:`vobscure.scenes._materials`)."""
 
 from __future__ import annotations
 
+import io
 import numbers
 import os
 import re
@@ -133,7 +134,7 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0, alpha: bo
         # one mesh per `o` object and `g` group, whatever their materials
         options = {"split_objects": True, "split_groups": True, "group_material": False}
     try:
-        loaded = trimesh.load(str(path), file_type=ext[1:], process=False, **options)
+        loaded = trimesh.load(**_source(path, ext), process=False, **options)
     except Exception as exc:  # trimesh raises many types for malformed files
         raise ValueError(f"could not read {path} as {ext[1:].upper()}: {type(exc).__name__}: {exc}") from exc
 
@@ -197,6 +198,63 @@ def load(path, *, name: str | None = None, smooth_angle: float = 60.0, alpha: bo
         raise ValueError(f"{path} holds no triangles with a non-zero area")
     return Scene(meshes, name=name if name is not None else path.stem,
                  smooth_angle=float(smooth_angle), alpha=masks, **file_view(path, meshes))
+
+
+#: An OBJ face or line statement with a relative (negative) index, e.g. ``f -4 -3 -2 -1``.
+_RELATIVE_INDEX = re.compile(rb"^[ \t]*[fl][ \t][^\n]*?[ \t/]-[0-9]", re.MULTILINE)
+
+
+def _source(path: Path, ext: str) -> dict:
+    """The ``trimesh.load`` arguments that read ``path``: the path itself, or for an OBJ file
+    with relative indices its text with them made absolute (and a resolver for its MTL and
+    textures), since trimesh resolves a relative index against the end of the file instead of
+    the statement's position (the OBJ specification's meaning: -1 is the last vertex defined
+    so far)."""
+    if ext != ".obj":
+        return dict(file_obj=str(path), file_type=ext[1:])
+    data = path.read_bytes()
+    if not _RELATIVE_INDEX.search(data):
+        return dict(file_obj=str(path), file_type="obj")
+    text = absolute_obj_indices(data.decode("utf-8", errors="replace"))
+    return dict(file_obj=io.BytesIO(text.encode("utf-8")), file_type="obj",
+                resolver=trimesh.resolvers.FilePathResolver(str(path)))
+
+
+def absolute_obj_indices(text: str) -> str:
+    """OBJ text whose relative (negative) ``v``/``vt``/``vn`` indices in ``f`` and ``l``
+    statements are made absolute: -k is the k-th last element of its kind defined before the
+    statement (Wavefront OBJ specification, "Referencing groups of vertices").
+
+    Examples
+    --------
+    >>> print(absolute_obj_indices("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf -3 -2 -1\\nv 0 0 1\\nf -4 2 -1"))
+    v 0 0 0
+    v 1 0 0
+    v 0 1 0
+    f 1 2 3
+    v 0 0 1
+    f 1 2 4
+    """
+    count = {"v": 0, "vt": 0, "vn": 0}
+    out = []
+    for line in text.split("\n"):
+        tokens = line.split()
+        if tokens and tokens[0] in count:
+            count[tokens[0]] += 1
+        elif tokens and tokens[0] in ("f", "l") and "-" in line:
+            new = [tokens[0]]
+            for token in tokens[1:]:
+                if token.startswith("#"):
+                    new.append(" ".join(tokens[tokens.index(token):]))
+                    break
+                fields = token.split("/")
+                for i, kind in enumerate(("v", "vt", "vn")[:len(fields)]):
+                    if fields[i].startswith("-") and fields[i][1:].isdigit():
+                        fields[i] = str(count[kind] + 1 + int(fields[i]))
+                new.append("/".join(fields))
+            line = " ".join(new)
+        out.append(line)
+    return "\n".join(out)
 
 
 def _compact(vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
@@ -289,7 +347,7 @@ def _obj_face_alpha(path: Path, parts, notes: _Notes) -> list:
     # coordinates by its corner positions (the same numbers, parsed from the same text).
     text = path.read_text(errors="replace")
     used = set(re.findall(r"^[ \t]*usemtl[ \t]+(.+?)[ \t]*$", text, flags=re.MULTILINE))
-    by_material = trimesh.load(str(path), file_type="obj", process=False, split_objects=True,
+    by_material = trimesh.load(**_source(path, ".obj"), process=False, split_objects=True,
                                split_groups=True, group_material=True)
     geometries = list(by_material.geometry.values()) if isinstance(by_material, trimesh.Scene) else [by_material]
     names = list(table)
