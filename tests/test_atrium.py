@@ -389,3 +389,21 @@ def test_docs_pictures_script_runs(tmp_path):
     record = json.loads((tmp_path / "provenance.json").read_text())
     assert set(record["scenes"]) == set(names()) | {"atrium/arcade", "atrium/gallery"}
     assert record["scenes"]["atrium/arcade"]["coverage"] >= MIN_COVERAGE
+
+
+def test_the_leaf_cards_are_traced_with_their_holes(scene):
+    """With the alpha test, rays pass the leaf cards' holes: removing material can only move a
+    pixel's first hit farther, and on the leaves' pixels many do move (the texture is mostly
+    holes); without it the cards are solid quads. The AO reference sees the holes too."""
+    solid = vo.Scene(scene.meshes, view=scene.view, smooth_angle=scene.smooth_angle)   # no alpha
+    plant = scene.meshes["leaves"].triangles[0].mean(axis=0)          # one plant, seen from 1.5 m
+    cam = vo.Camera.look_at(plant + (1.2, 0.6, 0.8), plant, size=(64, 48), fov_y=50)
+    gb_alpha, gb_solid = vo.render_gbuffer(scene, cam), vo.render_gbuffer(solid, cam)
+    leaves = scene.mesh_index == list(scene.meshes).index("leaves")
+    on_leaf = gb_solid.valid & leaves[np.where(gb_solid.valid, gb_solid.primitive, 0)]
+    assert on_leaf.sum() >= 50, "the camera must see plants"
+    finite = gb_solid.valid
+    assert np.all(gb_alpha.depth[finite] >= gb_solid.depth[finite] * (1 - 1e-6))
+    through = gb_alpha.depth[on_leaf] > gb_solid.depth[on_leaf] * (1 + 1e-6)
+    assert through.mean() > 0.2, through.mean()
+    assert np.all(gb_alpha.depth[~on_leaf & finite] == gb_solid.depth[~on_leaf & finite])
