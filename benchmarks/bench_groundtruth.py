@@ -44,7 +44,7 @@ What is measured (DESIGN.md, "Performance")
 
 4. The converged screen-space reference against the ray-cast AO, on a view inside the
    Cornell box (eye (0.2, 1, 0.6) toward (-0.3, 0.7, -1), 60-degree field of view) at
-   1280 x 720 (320 x 180 with ``--quick``), the radius
+   1280 x 720 (160 x 90 with ``--quick``), the radius
    :func:`~vobscure.experiments.common.default_radius`:
    ``vo.vo_reference(gb, samples=2048)`` (``vobscure compare``'s default
    ``screen_samples``) against ``vo.ground_truth(scene, gb, quantity="ao", rays=256)``
@@ -101,7 +101,7 @@ GOAL_GROUND_TRUTH_SECONDS = 60.0
 #: inside the Cornell box, and the goal on the reference's time over the ray-cast AO's.
 SCREEN_SAMPLES = 2048
 INSIDE_VIEW = dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0)
-INSIDE_SIZES = {False: (1280, 720), True: (320, 180)}
+INSIDE_SIZES = {False: (1280, 720), True: (160, 90)}
 GOAL_SCREEN_OVER_AO = 1.0
 
 
