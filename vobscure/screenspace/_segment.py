@@ -54,6 +54,12 @@ def _weights(a, b, z_m, h2, uu_r2, perspective: bool, quadratic: bool):
     return P0, uu_r2 * (h2 * P0 - P2)
 
 
+#: A fetched depth within this fraction of itself of the tangent plane's depth along the
+#: ray is the tangent plane: the depth buffer holds float32 hits (relative rounding 6e-8,
+#: Embree's hit points ~1e-6), and without this a plane would read 1/2 (1 clamped) only up
+#: to that rounding, with a spread over groups of the same size instead of 0.
+PLANE_RTOL = 1e-5
+
 #: The ball's weighted volume over R^3 (ball; the half-ball is half of it), by falloff:
 #: int_ball rho dV with rho = 1 or 1 - |x|^2 / R^2 (4 pi / 3; 4 pi (1/3 - 1/5) = 8 pi / 15).
 BALL_MASS = {"constant": 4.0 * np.pi / 3.0, "quadratic": 8.0 * np.pi / 15.0}
@@ -146,8 +152,11 @@ def ray_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, fetch, off
             else:
                 lo_seg, hi_seg = -h, h
             d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
-            # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness)
+            # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness); a depth on
+            # the tangent plane up to rounding starts exactly where the plane does
             lo = np.clip(np.maximum(d, 0.0) - z_m, lo_seg, hi_seg)
+            on_plane = (np.abs(d - (z_m - c0 / c1)) <= PLANE_RTOL * d) & np.isfinite(d)
+            lo = np.where(on_plane, np.clip(cut, lo_seg, hi_seg), lo)
             hi = hi_seg if thickness is None else np.clip(d + thickness - z_m, lo_seg, hi_seg)
             hi = np.maximum(lo, hi)
             _, occ = _weights(lo, hi, z_m, h2, uu_r2, px.perspective, quadratic)

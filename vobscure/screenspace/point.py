@@ -360,8 +360,8 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     >>> cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(8, 8), fov_y=40)
     >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam)
     >>> ref = vo.vo_reference(gb, radius=0.3, samples=256, normal_clamp=True)
-    >>> round(float(ref.value[4, 4]), 6), float(ref.stderr[4, 4]) < 1e-6, ref.samples
-    (1.0, True, 256)
+    >>> float(ref.value[4, 4]), float(ref.stderr[4, 4]), ref.samples
+    (1.0, 0.0, 256)
     """
     return _reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
                       thickness=thickness, falloff=falloff, seed=seed, fetch=fetch, offscreen=offscreen,
