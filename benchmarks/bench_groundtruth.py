@@ -42,6 +42,18 @@ What is measured (DESIGN.md, "Performance")
    512 x 512 (128 x 128 with ``--quick``), seconds and rays per second, against the
    requirement that 512^2 pixels x 256 rays take well under a minute.
 
+4. The converged screen-space reference against the ray-cast AO, on a view inside the
+   Cornell box (eye (0.2, 1, 0.6) toward (-0.3, 0.7, -1), 60-degree field of view) at
+   1280 x 720 (160 x 90 with ``--quick``), the radius
+   :func:`~vobscure.experiments.common.default_radius`:
+   ``vo.vo_reference(gb, samples=2048)`` (``vobscure compare``'s default
+   ``screen_samples``) against ``vo.ground_truth(scene, gb, quantity="ao", rays=256)``
+   (the cosine AO within the radius, compare's ``ao`` reference). Each is run ONCE, back
+   to back (a warm-up call would double minutes of work); the ratio of the two times and
+   the mean reported standard error of each over the covered pixels are printed (and the
+   same for ``samples=512``). Goal:
+   the reference takes at most the AO's time (ratio <= 1).
+
 Run from the repository root::
 
     python benchmarks/bench_groundtruth.py            # full sizes, about two minutes
@@ -86,6 +98,14 @@ SEED = 0
 GOAL_SPEEDUP = 1.6
 GOAL_GBUFFER = 2.0
 GOAL_GROUND_TRUTH_SECONDS = 60.0
+#: Benchmark 4: compare's default points per pixel of the screen-space reference, the view
+#: inside the Cornell box, and the goal on the reference's time over the ray-cast AO's.
+SCREEN_SAMPLES = 2048
+#: A smaller count of rays, printed too: its mean stderr against the 2048's and the AO's.
+SCREEN_SAMPLES_FEW = 512
+INSIDE_VIEW = dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0)
+INSIDE_SIZES = {False: (1280, 720), True: (160, 90)}
+GOAL_SCREEN_OVER_AO = 1.0
 
 
 @dataclass(frozen=True)
@@ -310,6 +330,39 @@ def bench_ground_truth(scene, size, repeats, threads, report: Report):
                 GOAL_GROUND_TRUTH_SECONDS, at_least=False, unit=" s")
 
 
+def bench_screen_reference(quick: bool, threads, report: Report):
+    """Benchmark 4: the converged screen-space reference against the 256-ray AO, one run each."""
+    import time
+
+    scene = vo.scenes.cornell_box()
+    size = INSIDE_SIZES[bool(quick)]
+    view = dict(INSIDE_VIEW)
+    cam = vo.Camera.look_at(view.pop("eye"), view.pop("target"), size=size, **view)
+    gb = vo.render_gbuffer(scene, cam)
+    radius = default_radius(scene)
+    pixels = int(gb.valid.sum())
+    report.header(f"4. Screen-space reference vs ray-cast AO: {scene.name} from inside, {size[0]}x{size[1]}, "
+                  f"{pixels} covered pixels, radius {radius:.4g}, one run each")
+    start = time.perf_counter()
+    ref = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)
+    screen_s = time.perf_counter() - start
+    start = time.perf_counter()
+    few = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES_FEW, seed=SEED)
+    few_s = time.perf_counter() - start
+    start = time.perf_counter()
+    ao = vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED, threads=threads)
+    ao_s = time.perf_counter() - start
+    valid = gb.valid
+    report.row(f"vo_reference(samples={SCREEN_SAMPLES})", screen_s, None, screen_s / ao_s,
+               f"mean stderr {float(np.mean(ref.stderr[valid])):.5f}")
+    report.row(f"vo_reference(samples={SCREEN_SAMPLES_FEW})", few_s, None, few_s / ao_s,
+               f"mean stderr {float(np.mean(few.stderr[valid])):.5f}")
+    report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None,
+               f"mean stderr {float(np.mean(ao.stderr[valid])):.5f}")
+    report.goal(f"[{scene.name} inside {size[0]}x{size[1]}] vo_reference / ground_truth ao (time)",
+                screen_s / ao_s, GOAL_SCREEN_OVER_AO, at_least=False)
+
+
 # --------------------------------------------------------------------------- main
 def parse_args(argv):
     parser = _bench.parser(__doc__, quick="small sizes (< 30 s), for smoke tests", statistic="best")
@@ -337,6 +390,7 @@ def main(argv=None) -> int:
             bench_gbuffer(scene, sizes.gbuffer, args.repeats, report)
         for scene in scenes:
             bench_ground_truth(scene, sizes.ground_truth, args.repeats, args.threads, report)
+        bench_screen_reference(args.quick, args.threads, report)
 
     return _bench.run(body, Report())
 

@@ -1008,8 +1008,10 @@ def test_anisotropic_pixels_match_square_pixels(aniso_pair, name):
 
 def test_anisotropic_reference_matches_square_reference(aniso_pair):
     g_sq, g_wide, _ = aniso_pair
-    a = vo.vo_reference(g_sq, radius=0.4, samples=4096, seed=1)
-    b = vo.vo_reference(g_wide, radius=0.4, samples=4096, seed=2)
+    # 1024 rays: about the standard error of 4096 points (docs/screenspace.md, "The converged
+    # reference"), against which the depth-edge outliers below are counted
+    a = vo.vo_reference(g_sq, radius=0.4, samples=1024, seed=1)
+    b = vo.vo_reference(g_wide, radius=0.4, samples=1024, seed=2)
     ok = g_sq.valid
     diff = (b.value[:, ::2] - a.value)[ok]
     assert np.abs(diff).mean() < ANISO_MEAN_TOL["reference"]

@@ -177,6 +177,42 @@ def test_reference_cache_across_sweeps(tmp_path, monkeypatch):
     _assert_same(first, second)
 
 
+def test_stage_seconds_of_computed_reused_and_cached_stages(tmp_path, monkeypatch, capsys):
+    """Each result names the stages its task ran; a stage made by an earlier task of the
+    worker, or read from the disk cache, takes 0 seconds and says so."""
+    from vobscure.experiments import InlineExecutor
+
+    slow = 0.05                              # seconds the patched reference sleeps at least
+    real_ref = vo.screenspace.vo_reference
+
+    def ref(*args, **kwargs):
+        import time
+        time.sleep(slow)
+        return real_ref(*args, **kwargs)
+
+    monkeypatch.setattr(vo.screenspace, "vo_reference", ref)
+    cache = ReferenceCache(tmp_path)
+    configs = [SweepConfig("slab", m, s, references=("screen", "ao"), repeats=1, **SMALL)
+               for m, s in (("line", 5), ("area", 1))]
+    S._MEMO.clear()
+    first, second = sweep(configs, executor=InlineExecutor(), progress=True, cache=cache)
+    keys = ["gbuffer", "reference:screen", "reference:ao", "method"]
+    assert list(first.stage_seconds) == keys and list(first.stage_status) == keys
+    assert set(first.stage_status.values()) == {"computed"}
+    assert first.stage_seconds["reference:screen"] >= slow
+    assert all(first.stage_seconds[k] > 0 for k in keys)
+    # the second configuration shares the view: G-buffer and references come from memory
+    assert second.stage_status == {"gbuffer": "reused", "reference:screen": "reused",
+                                   "reference:ao": "reused", "method": "computed"}
+    assert [second.stage_seconds[k] for k in keys[:3]] == [0.0, 0.0, 0.0]
+    assert "vo_reference" in capsys.readouterr().err       # the reference's own progress bar
+    S._MEMO.clear()
+    (again,) = sweep(configs[:1], executor=InlineExecutor(), cache=cache)
+    assert again.stage_status["reference:screen"] == again.stage_status["reference:ao"] == "cached"
+    assert again.stage_seconds["reference:screen"] == 0.0
+    assert again.stage_status["gbuffer"] == "computed"
+
+
 def test_failures_name_the_configuration(tmp_path):
     bad = SweepConfig(str(tmp_path / "missing.obj"), "line", 5, **SMALL)
     with ThreadPoolExecutor(1) as pool, pytest.raises(FileNotFoundError) as info:

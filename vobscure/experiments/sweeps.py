@@ -37,6 +37,7 @@ import json
 import multiprocessing
 import os
 import threading
+import time
 from collections import OrderedDict
 from collections.abc import Iterable, Mapping
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
@@ -285,6 +286,17 @@ class SweepResult:
         were requested (against ``ao`` when that was requested too).
     cache_hits : dict of str to bool
         Whether each reference came from the disk cache.
+    stage_seconds : dict of str to float
+        Wall-clock seconds of each stage this configuration's task ran, in the order run:
+        ``"gbuffer"`` (loading the scene and rendering the G-buffer), ``"reference:<name>"``
+        for each requested reference (``"reference:screen"``, ``"reference:ao"``, ...), and
+        ``"method"`` (the estimator's untimed first call plus its ``repeats`` timed runs).
+        A stage whose result the task did not compute -- a reference read from the disk
+        cache, or a G-buffer or reference an earlier task of the same worker made -- takes
+        0.0 here, and :attr:`stage_status` says why.
+    stage_status : dict of str to str
+        For each key of :attr:`stage_seconds`: ``"computed"``, ``"cached"`` (read from the
+        disk cache) or ``"reused"`` (made by an earlier task of the same worker).
     image : (H, W) ndarray or None
         The estimate, when :func:`sweep` was asked to keep images.
     references : dict of str to Estimate, or None
@@ -306,6 +318,8 @@ class SweepResult:
     errors: dict = field(default_factory=dict)
     decomposition: dict | None = None
     cache_hits: dict = field(default_factory=dict)
+    stage_seconds: dict = field(default_factory=dict)
+    stage_status: dict = field(default_factory=dict)
     image: np.ndarray | None = None
     references: dict | None = None
     gbuffer: object = None
@@ -390,9 +404,33 @@ def _stamp(spec):
     return (st.st_mtime_ns, st.st_size)
 
 
-def view(config: SweepConfig):
+class _Stages:
+    """The seconds and status of the stages of one task (:attr:`SweepResult.stage_seconds`)."""
+
+    def __init__(self):
+        self.seconds: dict = {}
+        self.status: dict = {}
+
+    def timed(self, name: str, make):
+        """``make`` wrapped to record its wall-clock seconds under ``name`` when it runs."""
+        def run():
+            start = time.perf_counter()
+            value = make()
+            self.seconds[name] = time.perf_counter() - start
+            self.status[name] = "computed"
+            return value
+        return run
+
+    def reused(self, name: str, status: str = "reused"):
+        """Record ``name`` as not computed by this task (unless it was)."""
+        if name not in self.seconds:
+            self.seconds[name] = 0.0
+            self.status[name] = status
+
+
+def view(config: SweepConfig, stages: _Stages | None = None):
     """(scene, camera, G-buffer) of a configuration, made once per worker process and kept
-    while the sweep runs."""
+    while the sweep runs. ``stages``: records the ``"gbuffer"`` stage's seconds."""
     from ..render import render_gbuffer
     from ..scenes import resolve
 
@@ -406,12 +444,19 @@ def view(config: SweepConfig):
         camera = config.camera if config.camera is not None else scene.camera(config.size)
         return scene, camera, render_gbuffer(scene, camera)
 
-    return _MEMO.get(("view", config.view_key, stamp), make_view)
+    if stages is not None:
+        make_view = stages.timed("gbuffer", make_view)
+    result = _MEMO.get(("view", config.view_key, stamp), make_view)
+    if stages is not None:
+        stages.reused("gbuffer")
+    return result
 
 
-def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache):
+def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache, stages: _Stages | None = None,
+               progress: bool = False):
     """(Estimate, cache hit) of the reference ``name`` of the configuration's view, made once
-    per worker: the registry entry's arguments, computed through the disk cache."""
+    per worker: the registry entry's arguments, computed through the disk cache. ``stages``
+    records the stage ``"reference:<name>"``; ``progress`` shows the computation's own bar."""
     from . import cache as _cache
 
     ref = _references.get(name)
@@ -423,28 +468,41 @@ def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache):
 
     def make():
         if ref.needs_scene:
-            return compute(scene, gb, cache=cache, progress=False, **params)
-        return compute(gb, scene, cache=cache, **params)
+            return compute(scene, gb, cache=cache, progress=progress, **params)
+        return compute(gb, scene, cache=cache, progress=progress, **params)
 
+    stage = f"reference:{name}"
     key = ("reference", config.view_key, _stamp(config.scene), name, json.dumps(params, sort_keys=True))
-    return _MEMO.get(key, make)
+    result = _MEMO.get(key, make if stages is None else stages.timed(stage, make))
+    if stages is not None:
+        if stages.status.get(stage) == "computed" and result[1]:
+            # made by this task, but read from the disk cache
+            stages.seconds[stage] = 0.0
+            stages.status[stage] = "cached"
+        stages.reused(stage, "cached" if result[1] else "reused")
+    return result
 
 
-def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
-    """One task of :func:`sweep` (top level, so that any executor can pickle it)."""
+def _run_config(config: SweepConfig, cache, keep_image: bool, progress: bool = False) -> SweepResult:
+    """One task of :func:`sweep` (top level, so that any executor can pickle it); ``progress``:
+    a progress bar for each reference computed."""
     from ..metrics import decompose, error
     from .common import time_calls
 
-    scene, camera, gb = view(config)
+    stages = _Stages()
+    scene, camera, gb = view(config, stages)
     radius = config.radius if config.radius is not None else default_radius(scene if scene is not None else gb)
-    made = {name: _reference(name, config, scene, gb, radius, cache) for name in config.references}
+    made = {name: _reference(name, config, scene, gb, radius, cache, stages, progress) for name in config.references}
     refs = {name: est for name, (est, _) in made.items()}
     mc = config.method_config
     kwargs = dict(radius=radius, normal_clamp=config.normal_clamp, thickness=config.thickness,
                   falloff=config.falloff, seed=config.seed)
     if mc.spec.needs_scene:
         kwargs["scene"] = scene
+    start = time.perf_counter()
     timings, values = time_calls({"run": lambda: mc.run(gb, **kwargs)}, config.repeats)
+    stages.seconds["method"] = time.perf_counter() - start
+    stages.status["method"] = "computed"
     image = values["run"]
     runs = timings["run"].runs
     errors = {name: error(image, ref.value) for name, ref in refs.items()}
@@ -460,6 +518,7 @@ def _run_config(config: SweepConfig, cache, keep_image: bool) -> SweepResult:
                        cpu_seconds=timings["run"].cpu_median if runs else nan, taps_per_pixel=mc.taps,
                        texels_per_pixel=mc.texels, pixels=int(gb.valid.sum()), errors=errors,
                        decomposition=decomposition, cache_hits={n: bool(h) for n, (_, h) in made.items()},
+                       stage_seconds=dict(stages.seconds), stage_status=dict(stages.status),
                        image=image if keep_image else None, references=refs if keep_image else None,
                        gbuffer=gb if keep_image else None)
 
@@ -513,7 +572,9 @@ def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, p
         pool of :data:`DEFAULT_WORKERS` processes (started with ``forkserver``, or ``spawn``
         where that is missing), shut down at the end. A given executor is left running.
     progress : bool
-        A tqdm progress bar over the configurations (off by default, as everywhere).
+        A tqdm progress bar over the configurations (off by default, as everywhere); with an
+        :class:`InlineExecutor` also one bar per reference computation, named after it
+        (tasks in other threads or processes draw none).
     cache : ReferenceCache, optional
         A disk cache for the references (shared by the workers; they must see its folder).
         Default: references live in the workers' memory only.
@@ -547,13 +608,14 @@ def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, p
     # grouped by view, so that the tasks of one G-buffer reach the workers together
     order = sorted(range(len(configs)), key=lambda i: (configs[i].view_key, i))
     own = executor is None
+    stage_bars = bool(progress) and isinstance(executor, InlineExecutor)
     if own:
         executor = _default_executor(min(DEFAULT_WORKERS, len(configs)))
     results: list = [None] * len(configs)
     futures = {}
     try:
         for i in order:
-            futures[executor.submit(_run_config, configs[i], cache, keep_images)] = i
+            futures[executor.submit(_run_config, configs[i], cache, keep_images, stage_bars)] = i
         with progress_bar(len(configs), "sweep", progress) as bar:
             for future in as_completed(futures):
                 i = futures[future]

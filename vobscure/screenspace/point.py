@@ -17,6 +17,7 @@ from ..patterns import SamplePattern
 from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
+from ._segment import ray_kernel
 
 __all__ = ["vo_point", "vo_reference", "point_taps"]
 
@@ -32,6 +33,35 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
                      thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
                      texture=texture)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
+
+
+def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen):
+    """The ball VO from the view-ray segments of the stratified ``unit`` square points
+    (:mod:`vobscure.screenspace._segment`), toroidally shifted per pixel by a tiled
+    64 x 64 texture of uniform shifts. Pixels whose ball reaches the eye's plane z = 0
+    (perspective) are point sampled instead, with as many points."""
+    C.as_gbuffer(gbuffer)
+    radius = C.check_positive(radius, "radius")
+    thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness)
+    texture = rng.random((64, 64, 2))
+    fallback = {}
+
+    def kernel(px):
+        v, exact = ray_kernel(px, radius=radius, unit=unit, normal_clamp=normal_clamp, thickness=thickness,
+                              falloff=falloff, fetch=fetch, offscreen=offscreen, shift=C.noise_at(px, texture))
+        if not exact.all():
+            if not fallback:
+                # stratified in the ball with antithetic partners, as the point path
+                half = max(1, len(unit) // 2)
+                pts = cube_to_uniform_ball(np.column_stack([unit[:half], rng.random(half)]))
+                fallback.update(pattern=SamplePattern(np.vstack([pts, -pts]), np.ones(2 * half)),
+                                texture=C.noise_texture(64, rng, 3, True))
+            sub = C.prepare(gbuffer, radius, index=px.index[~exact], depth64=px.depth_flat)
+            v[~exact] = _point_kernel(sub, radius=radius, pattern=fallback["pattern"], normal_clamp=normal_clamp,
+                                      thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
+                                      texture=fallback["texture"])
+        return v
+    return C.run_chunks(gbuffer, radius, kernel, np.dtype(np.float64))
 
 
 def _is_centre(s) -> bool:
@@ -244,18 +274,32 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
 
     What every screen-space estimator tends to with infinitely many samples (line sampling
     exactly so under an orthographic camera): the reference that separates an estimator's
-    sampling error from the error of the screen-space model itself. It tests the same
+    sampling error from the error of the screen-space model itself. It integrates the same
     occupancy as :func:`vo_point`: a point X = p + R s of the ball (of the half-ball with
-    ``normal_clamp``) is occupied when it lies behind the depth buffer at its projection.
+    ``normal_clamp``) is occupied when it lies behind the depth buffer at its projection
+    (within ``thickness`` behind it with the thickness model).
+
+    Each sample is a view ray through the ball: all of a ray's points project to the same
+    place, so one depth fetch there gives the occupancy along the ray's whole segment in
+    the ball, which is integrated exactly (volume element z^2 dz per unit of ray directions
+    under perspective, dz per unit area orthographically; the quadratic falloff is a
+    polynomial along the ray). The rays are drawn uniformly in the box of rays through the
+    ball, stratified (a jittered grid), so the mean over rays times the box's measure
+    estimates the occupied volume without bias; without ``normal_clamp`` the part of each
+    segment behind the tangent plane is a control variate with the known mean half the
+    ball, so planes read exactly 1/2 (``docs/screenspace.md``, "The converged reference").
+    Pixels whose ball reaches the eye's plane z = 0 (perspective) sample points of the
+    ball instead (jittered in the cube, mapped into the ball, antithetic pairs, a random
+    reflection per pixel).
 
     The ``samples`` are split into ``groups`` independent randomizations, computed one after
-    another (memory follows the image, not ``samples``). Each group fills the ball with its
-    own stratified set (jittered cells of a grid in the unit cube, mapped volume-preservingly
-    into the ball, plus the antithetic partner -s of every point) and gives each pixel its
-    own random 3-D reflection of the set. Every group mean is then an unbiased estimate of
-    the pixel's screen-space VO; the value is their mean and the standard error their
-    standard deviation over sqrt(groups), a Student-t quantity with ``groups - 1`` degrees
-    of freedom (as for the ray-cast ground truth, ``docs/groundtruth.md``).
+    another (memory follows the image, not ``samples``). Each group draws its own
+    stratified set and gives each pixel its own random shift of it (toroidal, in the unit
+    square of the stratification). Every group mean is then an unbiased estimate of the
+    pixel's screen-space VO; the value is their mean and the standard error their standard
+    deviation over sqrt(groups), a Student-t quantity with ``groups - 1`` degrees of
+    freedom (as for the ray-cast ground truth, ``docs/groundtruth.md``). The value is not
+    clipped: an unbiased estimate may stray from [0, 1] by its noise.
 
     Parameters
     ----------
@@ -264,8 +308,8 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     radius : float
         Radius R of the ball, in world units.
     samples : int or SamplePattern
-        An int: points in the ball over all groups, rounded up to a multiple of
-        2 * ``groups`` (each group's points come in antithetic pairs). A ball pattern
+        An int: rays (one depth tap each) per pixel over all groups, rounded up to a
+        multiple of 2 * ``groups``. A ball pattern
         ((n, 3), :func:`vobscure.patterns.ball`): each group uses that pattern with its own
         random 3-D reflection per pixel (the randomization of :func:`vo_point`), so the
         result is the expectation of :func:`vo_point` with that pattern over its per-pixel
@@ -301,8 +345,9 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     Estimate
         ``value`` and ``stderr`` of shape (H, W), NaN on background (float32 for a float32
         G-buffer). Where every group agrees on a value strictly between 0 and 1, ``stderr``
-        is one step of a group mean (1 / points per group, over sqrt(groups)) instead of 0;
-        where all agree on 0 or 1 it is 0. ``samples`` is the number of points per pixel.
+        is one step of a group mean (1 / samples per group, over sqrt(groups)) instead of 0;
+        where all agree on 0 or 1 it is 0. ``samples`` is the number of rays (points with a
+        pattern) per pixel.
 
     References
     ----------
@@ -318,6 +363,25 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     >>> float(ref.value[4, 4]), float(ref.stderr[4, 4]), ref.samples
     (1.0, 0.0, 256)
     """
+    return _reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
+                      thickness=thickness, falloff=falloff, seed=seed, fetch=fetch, offscreen=offscreen,
+                      groups=groups, progress=progress, along="segment")
+
+
+def _stratified_square(rng, n: int) -> np.ndarray:
+    """(n, 2) jittered points of the unit square: one in each of n cells of a q x q grid
+    (a random subset of the cells when n is not a square)."""
+    q = int(np.ceil(np.sqrt(n)))
+    idx = rng.permutation(q * q)[:n]
+    ij = np.stack(np.divmod(idx, q), axis=1)
+    return (ij + rng.random((n, 2))) / q
+
+
+def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen,
+               groups, progress, along: str):
+    """:func:`vo_reference`; ``along="point"`` tests each stratified point on its own instead of
+    integrating its view-ray segment (the same expectation, more variance: the independent
+    check of the tests)."""
     from tqdm.auto import tqdm
 
     pattern = samples if isinstance(samples, SamplePattern) else None
@@ -336,20 +400,23 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
         total = g * len(pattern.points)
     mean = M2 = None
     for k in tqdm(range(1, g + 1), desc="vo_reference", unit="group", disable=not progress, leave=False):
-        if pattern is None:
+        if pattern is None and along == "point":
             # stratified: jittered cells of a grid in the unit cube (a random subset of the
             # cells when half is not a cube), mapped volume-preservingly into the ball
             idx = rng.permutation(cells ** 3)[:half]
             ijk = np.stack(np.unravel_index(idx, (cells,) * 3), axis=1)
             pts = cube_to_uniform_ball((ijk + rng.random((half, 3))) / cells)
-            group_pattern = SamplePattern(np.vstack([pts, -pts]), np.ones(2 * half), method="stratified",
-                                          provenance={"generator": "vobscure.vo_reference",
-                                                      "samples": 2 * half})
+            points = np.vstack([pts, -pts])
+        if pattern is None and along == "segment":
+            x = _ray_vo(gbuffer, radius=radius, unit=_stratified_square(rng, total // g), normal_clamp=normal_clamp,
+                        thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen)
         else:
-            group_pattern = pattern
-        x = _point_vo(gbuffer, radius=radius, pattern=group_pattern, normal_clamp=normal_clamp,
-                      thickness=thickness, falloff=falloff, randomize=True, seed=rng, fetch=fetch,
-                      offscreen=offscreen, noise_size=64).astype(np.float64)
+            group_pattern = pattern if pattern is not None else SamplePattern(
+                points, np.ones(2 * half), method="stratified",
+                provenance={"generator": "vobscure.vo_reference", "samples": 2 * half})
+            x = _point_vo(gbuffer, radius=radius, pattern=group_pattern, normal_clamp=normal_clamp,
+                          thickness=thickness, falloff=falloff, randomize=True, seed=rng, fetch=fetch,
+                          offscreen=offscreen, noise_size=64).astype(np.float64)
         # Welford's running mean and sum of squared deviations of the group means
         if mean is None:
             mean, M2 = x, np.zeros_like(x)

@@ -1,0 +1,121 @@
+"""The converged screen-space VO (vo_reference) as segments along view rays, against an
+independent computation of the same occupancy integral: the stratified point sampling of
+the ball (vobscure.screenspace.point._reference with along="point", each point's occupancy
+tested on its own). Closed forms of the crease: test_point.py."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import vobscure as vo
+from vobscure.estimate import DEFAULT_GROUPS
+from vobscure.screenspace import point as P
+
+from conftest import FALSE_FAILURE, t_threshold
+
+#: Views inside the Cornell box: the realistic case of walls, creases and boxes in the ball.
+PERSPECTIVE = dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0)
+ORTHOGRAPHIC = dict(eye=(0.1, 1.1, 2.5), target=(-0.2, 0.8, -1.0), ortho_height=1.6)
+SIZE = (20, 14)
+RADIUS = 0.375
+#: Rays of the segments and points of the independent point sampling.
+SEGMENTS, POINTS = 256, 512
+#: Below this stderr both computations agree that a pixel is exact (a plane in the ball):
+#: there the values must agree to PLANE_TOL instead (the depth buffer holds Embree's
+#: float32 hits, so a plane's occupancy is exact to ~1e-6).
+EXACT_STDERR, PLANE_TOL = 1e-6, 1e-4
+CASES = [dict(), dict(normal_clamp=True), dict(thickness=0.1), dict(falloff="quadratic"),
+         dict(falloff="quadratic", normal_clamp=True), dict(fetch="nearest"), dict(offscreen="open"),
+         dict(normal_clamp=True, thickness=0.05, fetch="nearest", offscreen="open")]
+#: Every call of _agree is one test; Bonferroni over the pixels and the calls of this module.
+CALLS = 2 * len(CASES) + 3
+
+
+@pytest.fixture(scope="module")
+def views():
+    scene = vo.scenes.cornell_box()
+    out = {}
+    for name, view in (("perspective", PERSPECTIVE), ("orthographic", ORTHOGRAPHIC)):
+        kw = dict(view)
+        cam = vo.Camera.look_at(kw.pop("eye"), kw.pop("target"), size=SIZE, **kw)
+        out[name] = vo.render_gbuffer(scene, cam)
+    return out
+
+
+def _both(gb, radius=RADIUS, seed=0, **kw):
+    args = dict(radius=radius, normal_clamp=False, thickness=None, falloff="constant", fetch="bilinear",
+                offscreen="clamp", groups=DEFAULT_GROUPS, progress=False)
+    args.update(kw)
+    seg = P._reference(gb, samples=SEGMENTS, seed=seed, along="segment", **args)
+    pts = P._reference(gb, samples=POINTS, seed=seed + 1, along="point", **args)
+    return seg, pts
+
+
+def _agree(seg, pts, valid):
+    """Per-pixel t-test of the difference with both reported stderrs (Welch's degrees of
+    freedom are at least groups - 1, so that quantile is conservative), Bonferroni over the
+    pixels and the module's tests; pixels both call exact must agree to PLANE_TOL."""
+    s = np.hypot(seg.stderr, pts.stderr)[valid]
+    diff = (seg.value - pts.value)[valid]
+    exact = s < EXACT_STDERR
+    assert np.all(np.abs(diff[exact]) < PLANE_TOL), np.abs(diff[exact]).max()
+    z = diff[~exact] / s[~exact]
+    limit = t_threshold(DEFAULT_GROUPS - 1, tests=CALLS * valid.sum(), false_failure=FALSE_FAILURE)
+    assert np.max(np.abs(z)) < limit, (np.abs(z).max(), limit)
+    return z
+
+
+@pytest.mark.parametrize("view", ["perspective", "orthographic"])
+@pytest.mark.parametrize("case", range(len(CASES)), ids=lambda i: ",".join(f"{k}={v}" for k, v in CASES[i].items())
+                         or "default")
+def test_segments_agree_with_point_sampling(views, view, case):
+    gb = views[view]
+    seg, pts = _both(gb, **CASES[case])
+    assert np.isnan(seg.value[~gb.valid]).all() and np.isfinite(seg.value[gb.valid]).all()
+    _agree(seg, pts, gb.valid)
+
+
+def test_segments_have_less_noise_than_points_of_the_same_count(views):
+    """The point of the construction: one dimension integrated exactly. At equal counts the
+    mean reported stderr of the segments is below the points' (measured ratio ~0.5 here)."""
+    gb = views["perspective"]
+    args = dict(radius=RADIUS, normal_clamp=False, thickness=None, falloff="constant", fetch="bilinear",
+                offscreen="clamp", groups=DEFAULT_GROUPS, progress=False)
+    seg = P._reference(gb, samples=POINTS, seed=3, along="segment", **args)
+    pts = P._reference(gb, samples=POINTS, seed=3, along="point", **args)
+    assert np.mean(seg.stderr[gb.valid]) < np.mean(pts.stderr[gb.valid])
+
+
+@pytest.mark.parametrize("radius", [1e-2, 50.0])
+def test_extreme_radii(views, radius):
+    """A small ball sees its tangent plane only, away from the box's edges (1/2, 1
+    clamped: the control variate and the clamp make it exact); a huge one holds the eye,
+    where the perspective pixels are point sampled (the fallback), still agreeing."""
+    gb = views["perspective"]
+    seg, pts = _both(gb, radius=radius)
+    _agree(seg, pts, gb.valid)
+    if radius < 1:
+        plane = gb.valid & (seg.value == 0.5)
+        assert plane.sum() > 0.5 * gb.valid.sum()       # the walls away from the edges (57 %)
+        assert np.max(np.abs(seg.value[plane] - 0.5)) < PLANE_TOL
+        clamped = vo.vo_reference(gb, radius=radius, samples=64, normal_clamp=True)
+        assert np.max(np.abs(clamped.value[plane] - 1.0)) < PLANE_TOL
+
+
+def test_float32_gbuffer(views):
+    gb = views["orthographic"].astype(np.float32)
+    seg, pts = _both(gb)
+    assert seg.value.dtype == np.float32 and seg.stderr.dtype == np.float32
+    _agree(seg, pts, gb.valid)
+
+
+def test_one_pixel_and_an_empty_view():
+    scene = vo.scenes.cornell_box()
+    one = vo.render_gbuffer(scene, vo.Camera.look_at((0, 1, 0.5), (0, 1, -1), size=(1, 1), fov_y=40))
+    e = vo.vo_reference(one, radius=RADIUS, samples=64)
+    assert e.value.shape == (1, 1) and 0 < e.value[0, 0] < 1 and e.stderr[0, 0] > 0
+    empty = vo.render_gbuffer(scene, vo.Camera.look_at((0, 1, 5), (0, 1, 10), size=(6, 4), fov_y=40))
+    assert not empty.valid.any()
+    e = vo.vo_reference(empty, radius=RADIUS, samples=64)
+    assert np.isnan(e.value).all() and np.isnan(e.stderr).all()

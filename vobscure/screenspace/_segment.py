@@ -1,0 +1,177 @@
+"""Segments along view rays: the kernel of the converged screen-space VO
+(:func:`vobscure.vo_reference`).
+
+Every point of a view ray (a line through the eye under perspective, a line along the view
+axis under an orthographic camera) projects to the same pixel position, so ONE depth fetch
+there gives the depth-buffer occupancy (Loos & Sloan 2010, Sec. 4) of the whole ray: a point
+at view depth z is occupied when max(d, 0) < z (and z < d + thickness with the thickness
+model of Sec. 4.3), d the fetched depth. The ball's occupied volume is then an integral over
+rays of an integral along each ray that has a closed form; the rays are sampled, the
+segments integrated exactly: the same integral as point sampling with one dimension done
+exactly (``docs/screenspace.md``, "The converged reference").
+
+Parametrization (view space, z = depth): the ray is L(z) = z u with u = (a, b, 1)
+(perspective: the volume element is z^2 dz da db) or L(z) = (a, b, z) (orthographic:
+dz da db). With z_m the depth of the ray's point closest to the ball's centre p and
+t = z - z_m, the ball's segment is t in [-h, h], h^2 = (R^2 - |L(z_m) - p|^2) / |u|^2, and
+the quadratic falloff along it is rho = 1 - |L - p|^2 / R^2 = |u|^2 (h^2 - t^2) / R^2: every
+weight is a polynomial in t, integrated in closed form over the segment and its occupied
+part.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera.kernel import project_xy
+from . import _common as C
+
+
+def _powers(a, b):
+    """(b - a, (b^2 - a^2) / 2, (b^3 - a^3) / 3, (b^4 - a^4) / 4, (b^5 - a^5) / 5)."""
+    a2, b2 = a * a, b * b
+    return (b - a, (b2 - a2) / 2, (b2 * b - a2 * a) / 3, (b2 * b2 - a2 * a2) / 4, (b2 * b2 * b - a2 * a2 * a) / 5)
+
+
+def _weights(a, b, z_m, h2, uu_r2, perspective: bool, quadratic: bool):
+    """(int_a^b J dt, int_a^b J rho dt) along the rays, t = z - z_m.
+
+    J = (z_m + t)^2 (perspective) or 1 (orthographic); rho = uu_r2 (h^2 - t^2) (quadratic
+    falloff) or 1. Without ``quadratic`` the second is the first.
+    """
+    if not perspective and not quadratic:
+        w = b - a
+        return w, w
+    P0, P1, P2, P3, P4 = _powers(a, b)
+    if perspective:
+        zz = z_m * z_m
+        # int (z_m + t)^2 t^k dt = z_m^2 P_k + 2 z_m P_{k+1} + P_{k+2}
+        J0 = zz * P0 + 2.0 * z_m * P1 + P2
+        if not quadratic:
+            return J0, J0
+        J2 = zz * P2 + 2.0 * z_m * P3 + P4
+        return J0, uu_r2 * (h2 * J0 - J2)
+    return P0, uu_r2 * (h2 * P0 - P2)
+
+
+#: A fetched depth within this fraction of itself of the tangent plane's depth along the
+#: ray is the tangent plane: the depth buffer holds float32 hits (relative rounding 6e-8,
+#: Embree's hit points ~1e-6), and without this a plane would read 1/2 (1 clamped) only up
+#: to that rounding, with a spread over groups of the same size instead of 0.
+PLANE_RTOL = 1e-5
+
+#: The ball's weighted volume over R^3 (ball; the half-ball is half of it), by falloff:
+#: int_ball rho dV with rho = 1 or 1 - |x|^2 / R^2 (4 pi / 3; 4 pi (1/3 - 1/5) = 8 pi / 15).
+BALL_MASS = {"constant": 4.0 * np.pi / 3.0, "quadratic": 8.0 * np.pi / 15.0}
+
+
+def ball_box(px, radius):
+    """(a0, a1, b0, b1, exact) per pixel: the rays through the ball as a box of ray
+    directions (a, b, 1) (perspective) or of view (x, y) (orthographic), and where that box
+    holds every ray through the ball (perspective: the ball entirely in front, p_z > R)."""
+    p = px.p
+    R = float(radius)
+    if not px.perspective:
+        return p[:, 0] - R, p[:, 0] + R, p[:, 1] - R, p[:, 1] + R, np.ones(len(px.index), dtype=bool)
+    pz = p[:, 2]
+    front = pz > R * (1.0 + 1e-9)
+    den = np.where(front, pz * pz - R * R, 1.0)
+    bounds = []
+    for q in (p[:, 0], p[:, 1]):
+        # the two planes through the eye that touch the ball and hold the other axis:
+        # q / z = (q p_z -+ R sqrt(q^2 + p_z^2 - R^2)) / (p_z^2 - R^2)
+        root = R * np.sqrt(np.maximum(q * q + pz * pz - R * R, 0.0))
+        bounds += [(q * pz - root) / den, (q * pz + root) / den]
+    return (*bounds, front)
+
+
+def ray_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, fetch, offscreen, shift):
+    """Segment-integrated VO of one chunk of pixels for one group of rays.
+
+    ``unit`` (n, 2): stratified points of the unit square, moved by the pixel's toroidal
+    ``shift`` ((k, 2), uniform in the square: a Cranley-Patterson rotation), mapped
+    uniformly to the box :func:`ball_box` of rays through the ball. With A the box's area,
+    A / n sum_i int_occ J rho estimates the occupied weighted volume without bias, and
+
+        V = 1 - occupied / (the ball's weighted volume)      (the half-ball's with normal_clamp).
+
+    Without ``normal_clamp`` the tangent plane at p is a control variate: the part of each
+    segment behind it is subtracted and its exact mean, half the ball, added back, so a
+    plane reads 1/2 exactly. Returns ((k,) V, (k,) bool where the box was exact); the caller
+    computes the other pixels another way.
+    """
+    k = len(px.index)
+    quadratic = falloff == "quadratic"
+    R = float(radius)
+    a0, a1, b0, b1, exact = ball_box(px, R)
+    da, db = a1 - a0, b1 - b0
+    pc = [np.ascontiguousarray(px.p[:, a]) for a in range(3)]
+    nc = [np.ascontiguousarray(px.n[:, a]) for a in range(3)]
+    n_p = nc[0] * pc[0] + nc[1] * pc[1] + nc[2] * pc[2]
+    pp = pc[0] * pc[0] + pc[1] * pc[1] + pc[2] * pc[2]
+    s1 = np.ascontiguousarray(shift[:, 0])
+    s2 = np.ascontiguousarray(shift[:, 1])
+    uu_r2 = 1.0 / (R * R)
+    occ_sum = np.zeros(k)
+    plane_sum = np.zeros(k)
+    for u1, u2 in unit:
+        ua = u1 + s1
+        ua -= np.floor(ua)
+        ub = u2 + s2
+        ub -= np.floor(ub)
+        a = a0 + ua * da
+        b = b0 + ub * db
+        with np.errstate(divide="ignore", invalid="ignore"):
+            # every point of the ray projects here: (a, b) is the direction's (x / z, y / z),
+            # or the orthographic view (x, y)
+            x, y = project_xy(a, b, 1.0, px.fx, px.fy, px.cx, px.cy, False)
+            if px.perspective:
+                uu = a * a + b * b + 1.0
+                up = a * pc[0] + b * pc[1] + pc[2]
+                z_m = up / uu
+                h2 = (R * R - (pp - up * z_m)) / uu
+                c1 = a * nc[0] + b * nc[1] + nc[2]
+                c0 = z_m * c1 - n_p
+                uu_r2 = uu / (R * R)
+            else:
+                z_m = pc[2]
+                ex, ey = a - pc[0], b - pc[1]
+                h2 = R * R - (ex * ex + ey * ey)
+                c1 = nc[2]
+                c0 = nc[0] * ex + nc[1] * ey
+            hit = h2 > 0
+            h2 = np.maximum(h2, 0.0)
+            h = np.sqrt(h2)
+            # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Loos & Sloan 2010, Sec. 4.4)
+            cut = np.clip(-c0 / c1, -h, h)
+            away = c1 > 0          # the half-ball lies beyond the plane along the ray
+            if normal_clamp:
+                # the half-ball, n . (X - p) >= 0
+                lo_seg = np.where(away, cut, -h)
+                hi_seg = np.where(away, h, cut)
+            else:
+                lo_seg, hi_seg = -h, h
+            d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
+            # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness); a depth on
+            # the tangent plane up to rounding starts exactly where the plane does
+            lo = np.clip(np.maximum(d, 0.0) - z_m, lo_seg, hi_seg)
+            on_plane = (np.abs(d - (z_m - c0 / c1)) <= PLANE_RTOL * d) & np.isfinite(d)
+            lo = np.where(on_plane, np.clip(cut, lo_seg, hi_seg), lo)
+            hi = hi_seg if thickness is None else np.clip(d + thickness - z_m, lo_seg, hi_seg)
+            hi = np.maximum(lo, hi)
+            _, occ = _weights(lo, hi, z_m, h2, uu_r2, px.perspective, quadratic)
+            occ_sum += np.where(hit & np.isfinite(occ), occ, 0.0)
+            if not normal_clamp:
+                # the part of the segment on the plane's far side, n . (X - p) < 0
+                blo = np.where(away, -h, cut)
+                bhi = np.where(away, cut, h)
+                _, below = _weights(blo, bhi, z_m, h2, uu_r2, px.perspective, quadratic)
+                plane_sum += np.where(hit & np.isfinite(below), below, 0.0)
+    mass = BALL_MASS[falloff] * R ** 3
+    scale = (da * db) / len(unit)
+    if normal_clamp:
+        v = 1.0 - scale * occ_sum / (0.5 * mass)
+    else:
+        # control variate: scale * E[plane_sum] = mass / 2 exactly
+        v = 0.5 - scale * (occ_sum - plane_sum) / mass
+    return v, exact
