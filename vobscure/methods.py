@@ -96,7 +96,7 @@ def _one_tap_per_sample(n: int) -> int:
 
 
 def _reference_taps(n: int) -> int:
-    """vo_reference rounds its samples up to DEFAULT_GROUPS randomizations of antithetic pairs."""
+    """vo_reference rounds its samples (view rays, one depth tap each) up to a multiple of 2 x DEFAULT_GROUPS."""
     per_group = 2 * DEFAULT_GROUPS
     return per_group * max(1, -(-int(n) // per_group))
 

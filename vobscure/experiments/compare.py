@@ -112,6 +112,55 @@ def orbit_cameras(camera, frames: int, *, degrees: float = 10.0):
     return out
 
 
+class Stages:
+    """The seconds of each stage of a comparison, in the order they ran, for the printout and
+    ``provenance.json``: the view, each reference per radius (computed, read from the cache or
+    reused), the methods' runs (warm-up and timed repeats), the orbit and the thickness trials."""
+
+    def __init__(self):
+        self._records: dict[str, dict] = {}
+
+    def add(self, name: str, seconds: float, status: str) -> None:
+        rec = self._records.setdefault(name, dict(stage=name, seconds=0.0, status=status))
+        rec["seconds"] += float(seconds)
+        # one computation makes a stage computed; else read from the cache; else reused
+        order = ("computed", "cached", "reused")
+        rec["status"] = min(rec["status"], status, key=order.index)
+
+    def add_sweep(self, results) -> None:
+        """The stages of :class:`~vobscure.experiments.SweepResult.stage_seconds`, summed over the
+        results (a reused or cached stage costs nothing)."""
+        radii = {res.radius for res in results}
+        for res in results:
+            for key, seconds in res.stage_seconds.items():
+                status = res.stage_status.get(key, "computed")
+                if key == "method":
+                    name = "methods"
+                elif key.startswith("reference:"):
+                    name = f"reference {key.split(':', 1)[1]}" + (f" (R = {res.radius:.4g})" if len(radii) > 1 else "")
+                elif key == "gbuffer":
+                    continue      # rendered with the view, before the sweep
+                else:
+                    name = key
+                self.add(name, seconds, status)
+
+    @property
+    def records(self) -> list[dict]:
+        return [dict(r) for r in self._records.values()]
+
+    @staticmethod
+    def describe(record: dict) -> str:
+        """``"reference screen 12.3 s"``, with the status when it is not "computed".
+
+        Examples
+        --------
+        >>> Stages.describe(dict(stage="reference ao", seconds=0.01, status="cached"))
+        'reference ao 0.0 s (cached)'
+        """
+        status = "" if record["status"] == "computed" else f" ({record['status']})"
+        return f"{record['stage']} {record['seconds']:.1f} s{status}"
+
+
 @dataclass
 class CompareResult:
     """What :func:`compare` measured: one row per configuration, the verdict, and the files.
@@ -221,7 +270,7 @@ def _row(result, metrics=METRICS) -> dict:
 
 def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=None, methods=None,
             normal_clamp: bool = False, thickness=None, references=None, repeats: int = 3,
-            rays: int = 256, volume_samples: int = 1024, screen_samples: int = 2048, seed: int = 0,
+            rays: int = 256, volume_samples: int = 1024, screen_samples: int = 1024, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
             out=None, cache=True, progress: bool = False, plots: bool = True,
             write: bool = True, allow_open: bool = False) -> CompareResult:
@@ -266,9 +315,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     rays : int
         Rays per pixel of the ``ao`` and ``obscurance`` references.
     volume_samples : int
-        Points per ball of the world-space VO (``volumetric``).
+        Points per ball of the world-space VO (``volumetric`` and ``shell``).
     screen_samples : int
-        Points per ball of the converged screen-space VO (``screen``).
+        View-ray segments per pixel of the converged screen-space VO (``screen``, :func:`vobscure.vo_reference`).
     seed : int
         Seed of the estimators and of every reference.
     orbit : int
@@ -382,6 +431,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     from ..render import render_gbuffer
     from ..scenes.viewpoint import view_diagnostics, view_warnings
 
+    t_view = time.perf_counter()
     view_gb = sc if frame else render_gbuffer(sc, camera)     # a frame is its own view
     if not view_gb.valid.any():
         raise ValueError(f"the camera sees none of {scene_name!r}: no pixel of the {camera.width} x {camera.height} "
@@ -400,6 +450,8 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     out = Path(out) if out is not None else Path("vobscure-out") / f"compare-{scene_name}"
 
     t_start = time.perf_counter()
+    stages = Stages()
+    stages.add("view (G-buffer, radius)", t_start - t_view, "computed")
     common = dict(scene=sc, camera=camera, normal_clamp=normal_clamp, thickness=thickness, seed=seed,
                   references=references, rays=rays, volume_samples=volume_samples,
                   screen_samples=screen_samples, reference_seed=seed, allow_open=allow_open)
@@ -414,13 +466,19 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         all_refs.setdefault(res.radius, {k: v.value for k, v in res.references.items()})
         hits.setdefault(res.radius, res.cache_hits)
     gb = results[0].gbuffer
+    stages.add_sweep(results)
     if orbit > 1:
+        t0 = time.perf_counter()
         _orbit(sc, camera, rows, configs, radii, orbit, normal_clamp=normal_clamp, thickness=thickness,
                screen_samples=screen_samples, seed=seed, cache=store, progress=progress)
+        stages.add(f"orbit ({orbit} frames)", time.perf_counter() - t0, "computed")
     thickness_trials = []
+    t0 = time.perf_counter()
     if suggest and thickness is None and "volumetric" in references:
         thickness_trials = _thickness_trials(rows, images, all_refs, gb, normal_clamp=normal_clamp,
                                              seed=seed, repeats=repeats)
+    if thickness_trials:
+        stages.add("thickness trials", time.perf_counter() - t0, "computed")
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
     if missing:
         summary["text"].insert(0, missing_note(missing, sc, thickness))
@@ -446,7 +504,8 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         screen_samples=screen_samples, seed=seed, orbit=orbit, quick=bool(quick),
         target_rmse=target_rmse, budget_ms=budget_ms,
         cache=None if not store.enabled else str(store.directory),
-        cache_hits={f"{r:g}": h for r, h in hits.items()}, seconds=time.perf_counter() - t_start,
+        cache_hits={f"{r:g}": h for r, h in hits.items()}, stages=stages.records,
+        seconds=time.perf_counter() - t_view,
         machine=machine(), date=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     files = _write(out, rows, summary, provenance, all_refs, images, gb, plots) if write else {}
     return CompareResult(rows=rows, summary=summary, files=files, provenance=provenance,
@@ -788,6 +847,8 @@ def report_text(result: CompareResult) -> str:
     """The verdict and the files, as printed by ``vobscure compare``."""
     lines = [f"{result.provenance['scene']}: {len(result.rows)} configurations in "
              f"{result.provenance['seconds']:.1f} s.", ""]
+    if result.provenance.get("stages"):
+        lines += ["Time per stage: " + "; ".join(Stages.describe(r) for r in result.provenance["stages"]) + ".", ""]
     lines += [f"* {s}" for s in result.summary["text"]]
     lines.append("")
     lines += [f"wrote {p}" for p in result.files.values()]
