@@ -447,26 +447,32 @@ def _check_closed(scene: Scene, allow_open: bool) -> None:
 
 def _shell_occupied(tracer, q, shell) -> np.ndarray:
     """(n,) bool: the shell model's occupancy of world points ``q`` (docs/groundtruth.md, "The
-    shell reference"): occupied when a surface lies within the view depth ``thickness`` in front
-    of the point, along the ray from the point towards the camera.
+    shell reference"): every surface is a slab ``thickness`` thick on its far side from the
+    camera, so a point is occupied when the first surface on its ray towards the camera lies
+    within ``thickness`` of it measured along that surface's normal (ray length times |cos|).
 
-    ``shell`` is ``(eye, forward, perspective, thickness)``. Under perspective the ray leaves
-    towards the eye, and view depth falls by z / |x - eye| per unit length along it, so the
-    thickness t is t |x - eye| / z of ray (capped at the eye); under an orthographic camera, and
-    for a point not in front of the eye (z <= 0), the ray runs against the view direction for t.
+    ``shell`` is ``(eye, forward, perspective, thickness)``. The ray runs towards the eye
+    (perspective) or against the view direction (orthographic), up to the eye's plane; a point
+    not in front of the eye (view depth <= 0) looks against the view direction within
+    ``thickness``.
     """
     eye, forward, perspective, thickness = shell
     n = len(q)
+    rel = q - eye
+    z = rel @ forward
+    front = z > 0
     directions = np.broadcast_to(-forward, (n, 3)).copy()
-    tfar = np.full(n, thickness)
+    reach = np.where(front, z, thickness)
     if perspective:
-        rel = q - eye
-        z = rel @ forward
-        dist = np.linalg.norm(rel, axis=1)
-        front = z > 0
-        directions[front] = -rel[front] / dist[front, None]
-        tfar[front] = np.minimum(thickness * dist[front] / z[front], dist[front])
-    return tracer.occluded(q, directions, tfar, threads=1)
+        dist = np.linalg.norm(rel[front], axis=1)
+        directions[front] = -rel[front] / dist[:, None]
+        reach[front] = dist
+    hits = tracer.intersect(q, directions, reach, threads=1)
+    hit = hits.hit
+    depth = np.full(n, np.inf)
+    cos = np.abs(np.einsum("ij,ij->i", tracer.face_normals[hits.primitive[hit]], directions[hit]))
+    depth[hit] = hits.distance[hit] * cos
+    return depth <= thickness
 
 
 def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes, groups,
@@ -565,12 +571,13 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
     allow_open : bool
         Accept meshes that are not closed (the inside test may then be wrong).
     thickness : float, optional
-        The shell model instead of the inside test: every surface is a solid ``thickness``
-        thick in view depth behind it, seen from ``camera`` -- a point is occupied when a surface
-        lies within view depth ``thickness`` in front of it along its ray to the camera
-        (docs/groundtruth.md, "The shell reference"). Defined for any scene, closed or not; the
-        thickness model of the screen-space estimators (Loos & Sloan 2010, Sec. 4.3) applied to
-        every surface, hidden and off-screen ones included. None: the solid model (closed scenes).
+        The shell model instead of the inside test: every surface is a solid slab ``thickness``
+        thick (along its normal) on its far side from ``camera`` -- a point is occupied when the
+        first surface on its ray towards the camera lies within ``thickness`` of it, measured
+        along that surface's normal (docs/groundtruth.md, "The shell reference"). Defined for
+        any scene, closed or not: the thickness model of the screen-space estimators (Loos &
+        Sloan 2010, Sec. 4.3) with the thickness measured across each surface, for every
+        surface, hidden and off-screen ones included. None: the solid model (closed scenes).
     camera : Camera, optional
         The view of the shell model (required with ``thickness``; it needs a pose).
     groups, threads, progress
@@ -672,7 +679,7 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         Passed on.
     thickness : float, optional
         ``"volumetric"`` only: the shell model of :func:`volumetric_obscurance`, surfaces this
-        thick in the view depth of the G-buffer's camera; any scene, closed or not. None: the
+        thick on their far side from the G-buffer's camera; any scene, closed or not. None: the
         solid model, which needs a closed scene.
     bounces, albedo
         Interreflections for ``"ao"`` (see :func:`ambient_occlusion`); an error for the

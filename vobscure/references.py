@@ -43,8 +43,8 @@ __all__ = ["Reference", "Quantity", "REFERENCES", "QUANTITIES", "SAMPLE_PARAMETE
 #: ``vobscure compare``, and the keyword of the computing function each is passed as.
 SAMPLE_PARAMETERS = {"rays": "rays", "volume_samples": "samples", "screen_samples": "samples"}
 #: The thickness of the shell reference's surfaces when the estimate has none, as a fraction of
-#: the ball radius: every surface is as thick as the ball is wide in view depth, so that
-#: within a ball nothing behind a surface is taken as empty (docs/groundtruth.md).
+#: the ball radius: every surface is as thick as the ball's radius, so that within a ball
+#: nothing behind a surface is taken as empty (docs/groundtruth.md).
 SHELL_THICKNESS = 1.0
 #: The estimate's options a reference may share with it (passed on under the same name).
 _SHARED_OPTIONS = ("normal_clamp", "thickness", "falloff", "allow_open")
@@ -207,7 +207,7 @@ REFERENCES = _registry(
     Reference("shell", "shell ball VO", "volumetric", "volume_samples", measures_clamped="shell half-ball VO",
               options=("falloff", "normal_clamp", "thickness"), screen_limit=True,
               default_thickness=SHELL_THICKNESS,
-              summary="the ray-cast world-space VO of surfaces a thickness thick in view depth (the estimate's "
+              summary="the ray-cast world-space VO of surfaces a thickness thick behind them (the estimate's "
                       "--thickness, else the radius): any scene, closed or not"),
     Reference("ao", "cosine AO", "ao", "rays", weighting="cosine",
               summary="ray-cast ambient occlusion within the radius, cosine-weighted"),

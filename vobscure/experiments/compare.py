@@ -229,10 +229,10 @@ def missing_note(missing: dict, scene, thickness=None) -> str:
                f"meshes, and {len(bad)} of {len(scene.meshes)} mesh(es) are open or alpha-tested with holes "
                f"({_names(bad)}).")
         if stand == "shell":
-            t = (f"{_references.SHELL_THICKNESS:g} x the radius thick in view depth (--thickness sets it)"
-                 if thickness is None else f"{thickness:.4g} thick in view depth (--thickness)")
+            t = (f"{_references.SHELL_THICKNESS:g} x the radius thick behind them (--thickness sets it)"
+                 if thickness is None else f"{thickness:.4g} thick behind them (--thickness)")
             why += (f" The VO estimators are scored against 'shell' instead: the ray-cast VO of surfaces {t}, "
-                    f"the thickness model applied to every surface, hidden and off-screen ones included "
+                    f"the thickness model applied across every surface, hidden and off-screen ones included "
                     f"(docs/groundtruth.md); no thickness trials are run against it, since its thickness is "
                     f"that choice. --allow-open computes {name!r} anyway, with an inside test that may be wrong "
                     f"near the holes.")
