@@ -1,0 +1,307 @@
+"""The view-ray segment kernel of :func:`vobscure.vo_reference` with a lower cost per ray.
+
+It computes what :func:`vobscure.screenspace._segment.ray_kernel` computes (the same rays,
+the same depth-buffer occupancy, the same closed forms; ``docs/screenspace.md``, "The
+converged reference"), equal to it within float64 rounding (``tests/test_screen_reference.py``
+compares the two), restructured for speed:
+
+- the depth fetch reads one precomputed row per bilinear cell (:class:`DepthCells`: the
+  cell's interpolant as a bilinear polynomial, and whether its four corners are all
+  finite) instead of gathering four corners and testing them;
+- the weights along a segment are differences of one antiderivative F(t) of J rho,
+  evaluated in Horner form at the few points that bound the intervals (the segment's
+  occupied part minus its part behind the tangent plane is F(cut) - F(lo), plus the
+  even part F(h) + F(-h) where the half-ball lies beyond the plane);
+- the pixels are processed in blocks small enough for the temporaries to stay in cache,
+  with in-place arithmetic.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from . import _common as C
+from ._segment import BALL_MASS, PLANE_RTOL, ball_box
+
+#: Fewest pixels per block of the loop over rays: below it NumPy's cost per call dominates.
+#: Values do not depend on the blocks (every operation is per pixel).
+MIN_BLOCK = 4096
+
+_POOL: list[ThreadPoolExecutor] = []
+
+
+def _threads() -> int:
+    """The cores this process may use (the blocks of a chunk run on as many threads: NumPy
+    releases the GIL in its loops)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _map(fn, items):
+    """``[fn(item) for item in items]``, on this module's own thread pool when there are several
+    (its own: a caller may itself run on the tracer's pool)."""
+    if len(items) <= 1:
+        return [fn(item) for item in items]
+    if not _POOL:
+        _POOL.append(ThreadPoolExecutor(_threads(), thread_name_prefix="vobscure-segments"))
+    return list(_POOL[0].map(fn, items))
+
+
+class DepthCells:
+    """Per-cell bilinear data of a depth image, built once per image.
+
+    Cell (i, j) spans the pixel centres (i, j), (i, j + 1), (i + 1, j), (i + 1, j + 1)
+    (clamped at the last row and column, as :func:`vobscure.screenspace._common.fetch_depth`
+    does). With v the interpolated quantity (1/z under perspective, z otherwise) and
+    (tx, ty) in [0, 1]^2 the position in the cell, the interpolant
+    (1 - ty) ((1 - tx) v00 + tx v01) + ty ((1 - tx) v10 + tx v11) is stored as the
+    coefficients of c0 + c1 tx + c2 ty + c3 tx ty; ``ok`` marks the cells whose four
+    corners are finite (elsewhere the nearest pixel's depth is read).
+    """
+
+    def __init__(self, depth: np.ndarray, reciprocal: bool):
+        depth = np.asarray(depth, dtype=np.float64)
+        H, W = depth.shape
+        self.shape = (H, W)
+        self.flat = depth.reshape(-1)
+        self.reciprocal = bool(reciprocal)
+        i1 = np.minimum(np.arange(H) + 1, H - 1)
+        j1 = np.minimum(np.arange(W) + 1, W - 1)
+        corners = (depth, depth[:, j1], depth[i1, :], depth[i1][:, j1])
+        ok = np.isfinite(corners[0])
+        for c in corners[1:]:
+            ok &= np.isfinite(c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            v00, v01, v10, v11 = ((1.0 / c) if reciprocal else c for c in corners)
+            coef = np.stack([v00, v01 - v00, v10 - v00, (v11 - v10) - (v01 - v00)], axis=-1)
+        coef[~ok] = 0.0
+        self.coef = coef.reshape(H * W, 4)
+        self.ok = ok.reshape(-1)
+
+    def fetch(self, x: np.ndarray, y: np.ndarray, offscreen: str) -> np.ndarray:
+        """Bilinear depth at pixel coordinates (x, y), as ``fetch_depth(..., fetch="bilinear")``
+        with this image's ``reciprocal``."""
+        H, W = self.shape
+        if not np.isfinite(np.add.reduce(x) + np.add.reduce(y)):
+            return C.fetch_depth(self.flat.reshape(H, W), x, y, fetch="bilinear", offscreen=offscreen,
+                                 reciprocal=self.reciprocal)
+        fx = x - 0.5
+        np.maximum(fx, 0.0, out=fx)
+        np.minimum(fx, W - 1, out=fx)
+        fy = y - 0.5
+        np.maximum(fy, 0.0, out=fy)
+        np.minimum(fy, H - 1, out=fy)
+        j0 = fx.astype(np.intp)            # floor: fx >= 0
+        i0 = fy.astype(np.intp)
+        fx -= j0                           # tx
+        fy -= i0                           # ty
+        i0 *= W
+        i0 += j0                           # the cell's flat index
+        c = self.coef.take(i0, axis=0)
+        # c0 + c1 tx + c2 ty + c3 tx ty
+        v = c[:, 3] * fy
+        v += c[:, 1]
+        v *= fx
+        fy *= c[:, 2]
+        v += fy
+        v += c[:, 0]
+        with np.errstate(divide="ignore"):
+            d = np.divide(1.0, v, out=v) if self.reciprocal else v
+        ok = self.ok.take(i0)
+        if not ok.all():
+            bad = np.flatnonzero(~ok)
+            j = np.clip(np.floor(x[bad]), 0, W - 1).astype(np.intp)
+            i = np.clip(np.floor(y[bad]), 0, H - 1).astype(np.intp)
+            d[bad] = self.flat[i * W + j]
+        if offscreen == "open":
+            d[(x < 0) | (x >= W) | (y < 0) | (y >= H)] = np.inf
+        return d
+
+
+def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
+    """F(t) = int_0^t J rho' dt into ``out``, with rho' = h^2 - t^2 (the quadratic falloff
+    without its factor |u|^2 / R^2, applied by the caller) or 1, J = (z_m + t)^2 under
+    perspective and 1 orthographically (``_segment._weights`` gives int_a^b = F(b) - F(a))."""
+    if perspective:
+        if quadratic:
+            # h2 (zz t + z_m t^2 + t^3/3) - (zz t^3/3 + z_m t^4/2 + t^5/5)
+            np.multiply(t, -0.2, out=out)
+            out -= 0.5 * z_m
+            out *= t
+            out += (h2 - zz) / 3.0
+            out *= t
+            out += h2 * z_m
+            out *= t
+            out += h2 * zz
+        else:
+            # zz t + z_m t^2 + t^3/3
+            np.multiply(t, 1.0 / 3.0, out=out)
+            out += z_m
+            out *= t
+            out += zz
+    elif quadratic:
+        # h2 t - t^3/3
+        np.multiply(t, t, out=out)
+        out *= -1.0 / 3.0
+        out += h2
+    else:
+        out[...] = 1.0
+    out *= t
+    return out
+
+
+def _even(z_m, h2, perspective, quadratic):
+    """F(h) + F(-h) (0 orthographically, where J is even in t)."""
+    if not perspective:
+        return 0.0
+    return z_m * h2 * h2 if quadratic else 2.0 * z_m * h2
+
+
+def segment_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
+    """:func:`vobscure.screenspace._segment.ray_kernel` with the bilinear depth of ``cells``
+    (a :class:`DepthCells` of ``px.depth``; None: ``fetch="nearest"``): the same ((k,) V,
+    (k,) exact) within float64 rounding."""
+    k = len(px.index)
+    R = float(radius)
+    a0, a1, b0, b1, exact = ball_box(px, R)
+    px.p, px.n                      # computed once, before the threads read them
+    parts = max(1, min(_threads(), k // MIN_BLOCK))
+    edges = np.linspace(0, k, parts + 1).astype(int)
+
+    def run(sl):
+        return _block(px, sl, a0[sl], a1[sl] - a0[sl], b0[sl], b1[sl] - b0[sl], R, unit, normal_clamp,
+                      thickness, falloff, cells, offscreen, shift[sl])
+    v = np.concatenate(_map(run, [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]))
+    return v, exact
+
+
+def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
+    """The V of the pixels ``sl`` of ``px`` (see :func:`segment_kernel`)."""
+    quadratic = falloff == "quadratic"
+    persp = px.perspective
+    pc = [np.ascontiguousarray(px.p[sl, a]) for a in range(3)]
+    nc = [np.ascontiguousarray(px.n[sl, a]) for a in range(3)]
+    n_p = nc[0] * pc[0] + nc[1] * pc[1] + nc[2] * pc[2]
+    pp = pc[0] * pc[0] + pc[1] * pc[1] + pc[2] * pc[2]
+    s1 = np.ascontiguousarray(shift[:, 0])
+    s2 = np.ascontiguousarray(shift[:, 1])
+    RR = R * R
+    m = len(a0)
+    acc = np.zeros(m)
+    F_lo, F_b, tmp = np.empty(m), np.empty(m), np.empty(m)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for u1, u2 in unit:
+            ua = u1 + s1
+            ua -= np.floor(ua)
+            ub = u2 + s2
+            ub -= np.floor(ub)
+            a = ua
+            a *= da
+            a += a0
+            b = ub
+            b *= db
+            b += b0
+            # every point of the ray projects here (camera.kernel.project_xy at Z = 1)
+            x = px.cx + px.fx * a
+            y = px.cy - px.fy * b
+            if persp:
+                uu = a * a
+                uu += b * b
+                uu += 1.0
+                up = a * pc[0]
+                up += b * pc[1]
+                up += pc[2]
+                z_m = up / uu
+                h2 = pp - up * z_m
+                np.subtract(RR, h2, out=h2)
+                h2 /= uu
+                c1 = a * nc[0]
+                c1 += b * nc[1]
+                c1 += nc[2]
+                c0 = z_m * c1
+                c0 -= n_p
+                if quadratic:
+                    uu_r2 = uu
+                    uu_r2 /= RR
+            else:
+                z_m = pc[2]
+                ex, ey = a - pc[0], b - pc[1]
+                h2 = ex * ex
+                h2 += ey * ey
+                np.subtract(RR, h2, out=h2)
+                c1 = nc[2]
+                c0 = nc[0] * ex + nc[1] * ey
+                uu_r2 = 1.0 / RR
+            np.maximum(h2, 0.0, out=h2)
+            h = np.sqrt(h2)
+            # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Loos & Sloan 2010, Sec. 4.4)
+            q = c0 / c1
+            cut = np.negative(q)
+            np.maximum(cut, -h, out=cut)
+            np.minimum(cut, h, out=cut)
+            away = c1 > 0          # the half-ball lies beyond the plane along the ray
+            if normal_clamp:
+                lo_seg = np.where(away, cut, -h)
+                hi_seg = np.where(away, h, cut)
+            else:
+                lo_seg, hi_seg = -h, h
+            if cells is None:
+                d = C.fetch_depth(px.depth, x, y, fetch="nearest", offscreen=offscreen, reciprocal=persp)
+            else:
+                d = cells.fetch(x, y, offscreen)
+            # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness); a depth on
+            # the tangent plane up to rounding starts exactly where the plane does
+            lo = np.maximum(d, 0.0)
+            lo -= z_m
+            np.maximum(lo, lo_seg, out=lo)
+            np.minimum(lo, hi_seg, out=lo)
+            np.subtract(z_m, q, out=q)                      # the plane's depth along the ray
+            np.subtract(d, q, out=q)
+            np.abs(q, out=q)
+            on_plane = q <= PLANE_RTOL * d
+            if on_plane.any():
+                on_plane &= np.isfinite(d)
+                np.copyto(lo, cut, where=on_plane)          # cut lies in [lo_seg, hi_seg]
+            zz = z_m * z_m if persp else None
+            _antiderivative(lo, z_m, zz, h2, persp, quadratic, F_lo)
+            if thickness is None and not normal_clamp:
+                # occupied [lo, h] minus behind the plane ([cut, h], or [-h, cut] when away)
+                _antiderivative(cut, z_m, zz, h2, persp, quadratic, F_b)
+                if persp and away.any():
+                    np.subtract(_even(z_m, h2, persp, quadratic), F_b, out=F_b, where=away)
+                elif away.any():
+                    np.negative(F_b, out=F_b, where=away)
+                contrib = np.subtract(F_b, F_lo, out=F_b)
+            else:
+                if thickness is None:
+                    hi = hi_seg
+                else:
+                    hi = d + thickness
+                    hi -= z_m
+                    np.maximum(hi, lo_seg, out=hi)
+                    np.minimum(hi, hi_seg, out=hi)
+                    np.maximum(hi, lo, out=hi)
+                contrib = _antiderivative(hi, z_m, zz, h2, persp, quadratic, F_b)
+                contrib -= F_lo
+                if not normal_clamp:
+                    F_c = _antiderivative(cut, z_m, zz, h2, persp, quadratic, F_lo)
+                    F_h = _antiderivative(h, z_m, zz, h2, persp, quadratic, tmp)
+                    # below = F(cut) - F(-h) where away, F(h) - F(cut) elsewhere; F(-h) = even - F(h)
+                    below = np.where(away, F_c + F_h - _even(z_m, h2, persp, quadratic), F_h - F_c)
+                    contrib -= below
+            if quadratic:
+                contrib *= uu_r2
+            if not np.isfinite(np.add.reduce(contrib)):
+                contrib[~np.isfinite(contrib)] = 0.0
+            acc += contrib
+    mass = BALL_MASS[falloff] * R ** 3
+    scale = (da * db) / len(unit)
+    if normal_clamp:
+        return 1.0 - scale * acc / (0.5 * mass)
+    # control variate: its scaled mean is mass / 2 exactly (_segment.ray_kernel)
+    return 0.5 - scale * acc / mass
