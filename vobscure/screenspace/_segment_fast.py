@@ -60,8 +60,8 @@ class DepthCells:
     does). With v the interpolated quantity (1/z under perspective, z otherwise) and
     (tx, ty) in [0, 1]^2 the position in the cell, the interpolant
     (1 - ty) ((1 - tx) v00 + tx v01) + ty ((1 - tx) v10 + tx v11) is stored as the
-    coefficients of c0 + c1 tx + c2 ty + c3 tx ty; ``ok`` marks the cells whose four
-    corners are finite (elsewhere the nearest pixel's depth is read).
+    coefficients of c0 + c1 tx + c2 ty + c3 tx ty, NaN where any of the four corners is not
+    finite (there the nearest pixel's depth is read: the NaN marks those cells at no cost).
     """
 
     def __init__(self, depth: np.ndarray, reciprocal: bool):
@@ -79,49 +79,49 @@ class DepthCells:
         with np.errstate(divide="ignore", invalid="ignore"):
             v00, v01, v10, v11 = ((1.0 / c) if reciprocal else c for c in corners)
             coef = np.stack([v00, v01 - v00, v10 - v00, (v11 - v10) - (v01 - v00)], axis=-1)
-        coef[~ok] = 0.0
+        coef[~ok] = np.nan
         self.coef = coef.reshape(H * W, 4)
-        self.ok = ok.reshape(-1)
 
     def fetch(self, x: np.ndarray, y: np.ndarray, offscreen: str) -> np.ndarray:
         """Bilinear depth at pixel coordinates (x, y), as ``fetch_depth(..., fetch="bilinear")``
         with this image's ``reciprocal``."""
         H, W = self.shape
-        if not np.isfinite(np.add.reduce(x) + np.add.reduce(y)):
-            return C.fetch_depth(self.flat.reshape(H, W), x, y, fetch="bilinear", offscreen=offscreen,
-                                 reciprocal=self.reciprocal)
         fx = x - 0.5
-        np.maximum(fx, 0.0, out=fx)
-        np.minimum(fx, W - 1, out=fx)
         fy = y - 0.5
-        np.maximum(fy, 0.0, out=fy)
-        np.minimum(fy, H - 1, out=fy)
-        j0 = fx.astype(np.intp)            # floor: fx >= 0
-        i0 = fy.astype(np.intp)
+        for f, n in ((fx, W), (fy, H)):
+            lo, hi = np.minimum.reduce(f), np.maximum.reduce(f)
+            if not (lo >= 0 and hi <= n - 1):
+                if not np.isfinite(lo + hi):
+                    return C.fetch_depth(self.flat.reshape(H, W), x, y, fetch="bilinear", offscreen=offscreen,
+                                         reciprocal=self.reciprocal)
+                np.maximum(f, 0.0, out=f)
+                np.minimum(f, n - 1, out=f)
+        j0 = np.floor(fx)
+        i0 = np.floor(fy)
         fx -= j0                           # tx
         fy -= i0                           # ty
         i0 *= W
-        i0 += j0                           # the cell's flat index
-        c = self.coef.take(i0, axis=0)
+        i0 += j0
+        cell = i0.astype(np.intp)          # the cell's flat index (exact in float64)
+        c = self.coef.take(cell, axis=0)
         # c0 + c1 tx + c2 ty + c3 tx ty
-        v = c[:, 3] * fy
+        v = np.multiply(c[:, 3], fy, out=j0)
         v += c[:, 1]
         v *= fx
         fy *= c[:, 2]
         v += fy
         v += c[:, 0]
-        with np.errstate(divide="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore"):
             d = np.divide(1.0, v, out=v) if self.reciprocal else v
-        ok = self.ok.take(i0)
-        if not ok.all():
-            bad = np.flatnonzero(~ok)
+        if np.isnan(np.add.reduce(d)):
+            # a background corner (NaN coefficients): the nearest pixel's depth
+            bad = np.flatnonzero(np.isnan(d))
             j = np.clip(np.floor(x[bad]), 0, W - 1).astype(np.intp)
             i = np.clip(np.floor(y[bad]), 0, H - 1).astype(np.intp)
             d[bad] = self.flat[i * W + j]
         if offscreen == "open":
             d[(x < 0) | (x >= W) | (y < 0) | (y >= H)] = np.inf
         return d
-
 
 def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
     """F(t) = int_0^t J rho' dt into ``out``, with rho' = h^2 - t^2 (the quadratic falloff
@@ -239,30 +239,31 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 uu_r2 = 1.0 / RR
             np.maximum(h2, 0.0, out=h2)
             h = np.sqrt(h2)
+            mh = np.negative(h)
             # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Loos & Sloan 2010, Sec. 4.4)
             q = c0 / c1
             cut = np.negative(q)
-            np.maximum(cut, -h, out=cut)
+            np.maximum(cut, mh, out=cut)
             np.minimum(cut, h, out=cut)
             away = c1 > 0          # the half-ball lies beyond the plane along the ray
             if normal_clamp:
-                lo_seg = np.where(away, cut, -h)
+                lo_seg = np.where(away, cut, mh)
                 hi_seg = np.where(away, h, cut)
             else:
-                lo_seg, hi_seg = -h, h
+                lo_seg, hi_seg = mh, h
             if cells is None:
                 d = C.fetch_depth(px.depth, x, y, fetch="nearest", offscreen=offscreen, reciprocal=persp)
             else:
                 d = cells.fetch(x, y, offscreen)
             # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness); a depth on
             # the tangent plane up to rounding starts exactly where the plane does
-            lo = np.maximum(d, 0.0)
-            lo -= z_m
+            # (under perspective the segment lies in z > 0, so max(d, 0) - z_m and d - z_m
+            # clip to the same lo)
+            lo = d - z_m if persp else np.maximum(d, 0.0) - z_m
+            q += lo                                         # d minus the plane's depth
+            np.abs(q, out=q)
             np.maximum(lo, lo_seg, out=lo)
             np.minimum(lo, hi_seg, out=lo)
-            np.subtract(z_m, q, out=q)                      # the plane's depth along the ray
-            np.subtract(d, q, out=q)
-            np.abs(q, out=q)
             on_plane = q <= PLANE_RTOL * d
             if on_plane.any():
                 on_plane &= np.isfinite(d)
