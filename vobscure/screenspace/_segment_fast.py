@@ -81,21 +81,19 @@ class DepthCells:
             coef = np.stack([v00, v01 - v00, v10 - v00, (v11 - v10) - (v01 - v00)], axis=-1)
         coef[~ok] = np.nan
         self.coef = coef.reshape(H * W, 4)
+        self.any_background = not ok.all()
 
-    def fetch(self, x: np.ndarray, y: np.ndarray, offscreen: str) -> np.ndarray:
-        """Bilinear depth at pixel coordinates (x, y), as ``fetch_depth(..., fetch="bilinear")``
-        with this image's ``reciprocal``."""
+    def fetch(self, fx: np.ndarray, fy: np.ndarray, offscreen: str) -> np.ndarray:
+        """Bilinear depth at the finite pixel coordinates (fx + 1/2, fy + 1/2), as
+        ``fetch_depth(..., fetch="bilinear")`` with this image's ``reciprocal``. ``fx`` and
+        ``fy`` (the coordinates relative to the first pixel centre) are overwritten."""
         H, W = self.shape
-        fx = x - 0.5
-        fy = y - 0.5
-        for f, n in ((fx, W), (fy, H)):
-            lo, hi = np.minimum.reduce(f), np.maximum.reduce(f)
-            if not (lo >= 0 and hi <= n - 1):
-                if not np.isfinite(lo + hi):
-                    return C.fetch_depth(self.flat.reshape(H, W), x, y, fetch="bilinear", offscreen=offscreen,
-                                         reciprocal=self.reciprocal)
-                np.maximum(f, 0.0, out=f)
-                np.minimum(f, n - 1, out=f)
+        if offscreen == "open":
+            outside = (fx < -0.5) | (fx >= W - 0.5) | (fy < -0.5) | (fy >= H - 0.5)
+        # the nearest pixel, where a cell has a background corner: floor(x) = floor(fx + 1/2)
+        near = (fx + 0.5, fy + 0.5) if self.any_background else None
+        np.clip(fx, 0.0, W - 1, out=fx)
+        np.clip(fy, 0.0, H - 1, out=fy)
         j0 = np.floor(fx)
         i0 = np.floor(fy)
         fx -= j0                           # tx
@@ -113,14 +111,14 @@ class DepthCells:
         v += c[:, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             d = np.divide(1.0, v, out=v) if self.reciprocal else v
-        if np.isnan(np.add.reduce(d)):
+        if near is not None and np.isnan(np.add.reduce(d)):
             # a background corner (NaN coefficients): the nearest pixel's depth
             bad = np.flatnonzero(np.isnan(d))
-            j = np.clip(np.floor(x[bad]), 0, W - 1).astype(np.intp)
-            i = np.clip(np.floor(y[bad]), 0, H - 1).astype(np.intp)
+            j = np.clip(np.floor(near[0][bad]), 0, W - 1).astype(np.intp)
+            i = np.clip(np.floor(near[1][bad]), 0, H - 1).astype(np.intp)
             d[bad] = self.flat[i * W + j]
         if offscreen == "open":
-            d[(x < 0) | (x >= W) | (y < 0) | (y >= H)] = np.inf
+            d[outside] = np.inf
         return d
 
 def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
@@ -188,9 +186,20 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
     nc = [np.ascontiguousarray(px.n[sl, a]) for a in range(3)]
     n_p = nc[0] * pc[0] + nc[1] * pc[1] + nc[2] * pc[2]
     pp = pc[0] * pc[0] + pc[1] * pc[1] + pc[2] * pc[2]
+    RR = R * R
+    RR_pp = RR - pp
+    # the rays' pixel coordinates are finite when the box of rays is
+    finite = all(np.isfinite(q).all() for q in (a0, da, b0, db))
+    if cells is None or not finite:
+        def fetch(fx, fy):
+            return C.fetch_depth(px.depth, fx + 0.5, fy + 0.5, fetch="bilinear" if cells else "nearest",
+                                 offscreen=offscreen, reciprocal=persp)
+    else:
+        def fetch(fx, fy):
+            return cells.fetch(fx, fy, offscreen)
+    cx, cy = px.cx - 0.5, px.cy - 0.5
     s1 = np.ascontiguousarray(shift[:, 0])
     s2 = np.ascontiguousarray(shift[:, 1])
-    RR = R * R
     m = len(a0)
     acc = np.zeros(m)
     F_lo, F_b, tmp = np.empty(m), np.empty(m), np.empty(m)
@@ -206,9 +215,12 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             b = ub
             b *= db
             b += b0
-            # every point of the ray projects here (camera.kernel.project_xy at Z = 1)
-            x = px.cx + px.fx * a
-            y = px.cy - px.fy * b
+            # every point of the ray projects here (camera.kernel.project_xy at Z = 1), minus
+            # the half pixel to the first pixel centre
+            fx = px.fx * a
+            fx += cx
+            fy = px.fy * b
+            np.subtract(cy, fy, out=fy)
             if persp:
                 uu = a * a
                 uu += b * b
@@ -217,8 +229,8 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 up += b * pc[1]
                 up += pc[2]
                 z_m = up / uu
-                h2 = pp - up * z_m
-                np.subtract(RR, h2, out=h2)
+                h2 = up * z_m
+                h2 += RR_pp
                 h2 /= uu
                 c1 = a * nc[0]
                 c1 += b * nc[1]
@@ -243,18 +255,14 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Loos & Sloan 2010, Sec. 4.4)
             q = c0 / c1
             cut = np.negative(q)
-            np.maximum(cut, mh, out=cut)
-            np.minimum(cut, h, out=cut)
+            np.clip(cut, mh, h, out=cut)
             away = c1 > 0          # the half-ball lies beyond the plane along the ray
             if normal_clamp:
                 lo_seg = np.where(away, cut, mh)
                 hi_seg = np.where(away, h, cut)
             else:
                 lo_seg, hi_seg = mh, h
-            if cells is None:
-                d = C.fetch_depth(px.depth, x, y, fetch="nearest", offscreen=offscreen, reciprocal=persp)
-            else:
-                d = cells.fetch(x, y, offscreen)
+            d = fetch(fx, fy)
             # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness); a depth on
             # the tangent plane up to rounding starts exactly where the plane does
             # (under perspective the segment lies in z > 0, so max(d, 0) - z_m and d - z_m
@@ -262,11 +270,10 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             lo = d - z_m if persp else np.maximum(d, 0.0) - z_m
             q += lo                                         # d minus the plane's depth
             np.abs(q, out=q)
-            np.maximum(lo, lo_seg, out=lo)
-            np.minimum(lo, hi_seg, out=lo)
-            on_plane = q <= PLANE_RTOL * d
+            np.clip(lo, lo_seg, hi_seg, out=lo)
+            # (< rather than <=: a background d = inf is not on the plane)
+            on_plane = q < PLANE_RTOL * d
             if on_plane.any():
-                on_plane &= np.isfinite(d)
                 np.copyto(lo, cut, where=on_plane)          # cut lies in [lo_seg, hi_seg]
             zz = z_m * z_m if persp else None
             _antiderivative(lo, z_m, zz, h2, persp, quadratic, F_lo)
@@ -284,8 +291,7 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 else:
                     hi = d + thickness
                     hi -= z_m
-                    np.maximum(hi, lo_seg, out=hi)
-                    np.minimum(hi, hi_seg, out=hi)
+                    np.clip(hi, lo_seg, hi_seg, out=hi)
                     np.maximum(hi, lo, out=hi)
                 contrib = _antiderivative(hi, z_m, zz, h2, persp, quadratic, F_b)
                 contrib -= F_lo
