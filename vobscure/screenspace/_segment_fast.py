@@ -235,8 +235,10 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 c1 = a * nc[0]
                 c1 += b * nc[1]
                 c1 += nc[2]
-                c0 = z_m * c1
-                c0 -= n_p
+                # the tangent plane n . (X - p) = 0 meets the ray at depth n.p / n.u
+                # (Loos & Sloan 2010, Sec. 4.4), t = cut there
+                zp = n_p / c1
+                cut = zp - z_m
                 if quadratic:
                     uu_r2 = uu
                     uu_r2 /= RR
@@ -247,14 +249,16 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 h2 += ey * ey
                 np.subtract(RR, h2, out=h2)
                 c1 = nc[2]
-                c0 = nc[0] * ex + nc[1] * ey
+                # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Sec. 4.4) is 0 at cut
+                cut = nc[0] * ex
+                cut += nc[1] * ey
+                cut /= c1
+                np.negative(cut, out=cut)
+                zp = z_m + cut
                 uu_r2 = 1.0 / RR
             np.maximum(h2, 0.0, out=h2)
             h = np.sqrt(h2)
             mh = np.negative(h)
-            # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Loos & Sloan 2010, Sec. 4.4)
-            q = c0 / c1
-            cut = np.negative(q)
             np.clip(cut, mh, h, out=cut)
             away = c1 > 0          # the half-ball lies beyond the plane along the ray
             if normal_clamp:
@@ -268,9 +272,9 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             # (under perspective the segment lies in z > 0, so max(d, 0) - z_m and d - z_m
             # clip to the same lo)
             lo = d - z_m if persp else np.maximum(d, 0.0) - z_m
-            q += lo                                         # d minus the plane's depth
-            np.abs(q, out=q)
             np.clip(lo, lo_seg, hi_seg, out=lo)
+            q = np.subtract(d, zp, out=zp)                  # d minus the plane's depth
+            np.abs(q, out=q)
             # (< rather than <=: a background d = inf is not on the plane)
             on_plane = q < PLANE_RTOL * d
             if on_plane.any():
