@@ -90,8 +90,6 @@ class DepthCells:
         H, W = self.shape
         if offscreen == "open":
             outside = (fx < -0.5) | (fx >= W - 0.5) | (fy < -0.5) | (fy >= H - 0.5)
-        # the nearest pixel, where a cell has a background corner: floor(x) = floor(fx + 1/2)
-        near = (fx + 0.5, fy + 0.5) if self.any_background else None
         np.clip(fx, 0.0, W - 1, out=fx)
         np.clip(fy, 0.0, H - 1, out=fy)
         j0 = np.floor(fx)
@@ -106,20 +104,23 @@ class DepthCells:
         v = np.multiply(c[:, 3], fy, out=j0)
         v += c[:, 1]
         v *= fx
-        fy *= c[:, 2]
-        v += fy
+        v += np.multiply(c[:, 2], fy, out=i0)
         v += c[:, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             d = np.divide(1.0, v, out=v) if self.reciprocal else v
-        if near is not None and np.isnan(np.add.reduce(d)):
-            # a background corner (NaN coefficients): the nearest pixel's depth
+        if self.any_background and np.isnan(np.add.reduce(d)):
+            # a background corner (NaN coefficients): the nearest pixel's depth, the cell's
+            # corner nearest to (x, y) = (fx + 1/2, fy + 1/2) (at a clamped edge t is 0 and
+            # the corner the edge pixel)
             bad = np.flatnonzero(np.isnan(d))
-            j = np.clip(np.floor(near[0][bad]), 0, W - 1).astype(np.intp)
-            i = np.clip(np.floor(near[1][bad]), 0, H - 1).astype(np.intp)
+            i, j = np.divmod(cell[bad], W)
+            i += fy[bad] >= 0.5
+            j += fx[bad] >= 0.5
             d[bad] = self.flat[i * W + j]
         if offscreen == "open":
             d[outside] = np.inf
         return d
+
 
 def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
     """F(t) = int_0^t J rho' dt into ``out``, with rho' = h^2 - t^2 (the quadratic falloff
