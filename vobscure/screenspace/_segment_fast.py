@@ -12,8 +12,9 @@ compares the two), restructured for speed:
   evaluated in Horner form at the few points that bound the intervals (the segment's
   occupied part minus its part behind the tangent plane is F(cut) - F(lo), plus the
   even part F(h) + F(-h) where the half-ball lies beyond the plane);
-- the pixels are processed in blocks small enough for the temporaries to stay in cache,
-  with in-place arithmetic.
+- the arithmetic is in place where it can be, and the pixels of a chunk are split into
+  blocks computed on a thread pool (NumPy releases the GIL in its loops); every operation
+  is per pixel, so the blocks do not change the values.
 """
 
 from __future__ import annotations
@@ -62,6 +63,16 @@ class DepthCells:
     (1 - ty) ((1 - tx) v00 + tx v01) + ty ((1 - tx) v10 + tx v11) is stored as the
     coefficients of c0 + c1 tx + c2 ty + c3 tx ty, NaN where any of the four corners is not
     finite (there the nearest pixel's depth is read: the NaN marks those cells at no cost).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cells = DepthCells(np.array([[1.0, 2.0], [1.0, 2.0]]), reciprocal=True)
+    >>> float(cells.fetch(np.array([0.5]), np.array([0.0]), "clamp")[0])    # 1 / (1/2 + 1/4)
+    1.3333333333333333
+    >>> cells = DepthCells(np.array([[1.0, 2.0], [1.0, np.inf]]), reciprocal=True)
+    >>> float(cells.fetch(np.array([0.5]), np.array([0.0]), "clamp")[0])    # nearest: (0, 1)
+    2.0
     """
 
     def __init__(self, depth: np.ndarray, reciprocal: bool):
