@@ -18,6 +18,7 @@ from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
 from ._segment import ray_kernel
+from ._segment_fast import DepthCells, segment_kernel
 
 __all__ = ["vo_point", "vo_reference", "point_taps"]
 
@@ -35,20 +36,30 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
-def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen):
+def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen, fast=True):
     """The ball VO from the view-ray segments of the stratified ``unit`` square points
     (:mod:`vobscure.screenspace._segment`), toroidally shifted per pixel by a tiled
     64 x 64 texture of uniform shifts. Pixels whose ball reaches the eye's plane z = 0
-    (perspective) are point sampled instead, with as many points."""
+    (perspective) are point sampled instead, with as many points. ``fast``: the kernel of
+    :mod:`vobscure.screenspace._segment_fast` (the same values within float64 rounding);
+    False: the plain ``_segment.ray_kernel``."""
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness)
     texture = rng.random((64, 64, 2))
     fallback = {}
+    cells = {}
 
     def kernel(px):
-        v, exact = ray_kernel(px, radius=radius, unit=unit, normal_clamp=normal_clamp, thickness=thickness,
-                              falloff=falloff, fetch=fetch, offscreen=offscreen, shift=C.noise_at(px, texture))
+        shift = C.noise_at(px, texture)
+        if fast:
+            if not cells:
+                cells["depth"] = DepthCells(px.depth, px.perspective) if fetch == "bilinear" else None
+            v, exact = segment_kernel(px, radius=radius, unit=unit, normal_clamp=normal_clamp, thickness=thickness,
+                                      falloff=falloff, cells=cells["depth"], offscreen=offscreen, shift=shift)
+        else:
+            v, exact = ray_kernel(px, radius=radius, unit=unit, normal_clamp=normal_clamp, thickness=thickness,
+                                  falloff=falloff, fetch=fetch, offscreen=offscreen, shift=shift)
         if not exact.all():
             if not fallback:
                 # stratified in the ball with antithetic partners, as the point path
@@ -378,7 +389,7 @@ def _stratified_square(rng, n: int) -> np.ndarray:
 
 
 def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen,
-               groups, progress, along: str):
+               groups, progress, along: str, fast: bool = True):
     """:func:`vo_reference`; ``along="point"`` tests each stratified point on its own instead of
     integrating its view-ray segment (the same expectation, more variance: the independent
     check of the tests)."""
@@ -409,7 +420,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
             points = np.vstack([pts, -pts])
         if pattern is None and along == "segment":
             x = _ray_vo(gbuffer, radius=radius, unit=_stratified_square(rng, total // g), normal_clamp=normal_clamp,
-                        thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen)
+                        thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen,
+                        fast=fast)
         else:
             group_pattern = pattern if pattern is not None else SamplePattern(
                 points, np.ones(2 * half), method="stratified",

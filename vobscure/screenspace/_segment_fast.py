@@ -1,0 +1,330 @@
+"""The view-ray segment kernel of :func:`vobscure.vo_reference` with a lower cost per ray.
+
+It computes what :func:`vobscure.screenspace._segment.ray_kernel` computes (the same rays,
+the same depth-buffer occupancy, the same closed forms; ``docs/screenspace.md``, "The
+converged reference"), equal to it within float64 rounding (``tests/test_screen_reference.py``
+compares the two), restructured for speed:
+
+- the depth fetch reads one precomputed row per bilinear cell (:class:`DepthCells`: the
+  cell's interpolant as a bilinear polynomial, and whether its four corners are all
+  finite) instead of gathering four corners and testing them;
+- the weights along a segment are differences of one antiderivative F(t) of J rho,
+  evaluated in Horner form at the few points that bound the intervals (the segment's
+  occupied part minus its part behind the tangent plane is F(cut) - F(lo), plus the
+  even part F(h) + F(-h) where the half-ball lies beyond the plane);
+- the arithmetic is in place where it can be, and the pixels of a chunk are split into
+  blocks computed on a thread pool (NumPy releases the GIL in its loops); every operation
+  is per pixel, so the blocks do not change the values.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from . import _common as C
+from ._segment import BALL_MASS, PLANE_RTOL, ball_box
+
+#: Fewest pixels per block of the loop over rays: below it NumPy's cost per call dominates.
+#: Values do not depend on the blocks (every operation is per pixel).
+MIN_BLOCK = 4096
+
+_POOL: list[ThreadPoolExecutor] = []
+
+
+def _threads() -> int:
+    """The cores this process may use (the blocks of a chunk run on as many threads: NumPy
+    releases the GIL in its loops)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _map(fn, items):
+    """``[fn(item) for item in items]``, on this module's own thread pool when there are several
+    (its own: a caller may itself run on the tracer's pool)."""
+    if len(items) <= 1:
+        return [fn(item) for item in items]
+    if not _POOL:
+        _POOL.append(ThreadPoolExecutor(_threads(), thread_name_prefix="vobscure-segments"))
+    return list(_POOL[0].map(fn, items))
+
+
+class DepthCells:
+    """Per-cell bilinear data of a depth image, built once per image.
+
+    Cell (i, j) spans the pixel centres (i, j), (i, j + 1), (i + 1, j), (i + 1, j + 1)
+    (clamped at the last row and column, as :func:`vobscure.screenspace._common.fetch_depth`
+    does). With v the interpolated quantity (1/z under perspective, z otherwise) and
+    (tx, ty) in [0, 1]^2 the position in the cell, the interpolant
+    (1 - ty) ((1 - tx) v00 + tx v01) + ty ((1 - tx) v10 + tx v11) is stored as the
+    coefficients of c0 + c1 tx + c2 ty + c3 tx ty, NaN where any of the four corners is not
+    finite (there the nearest pixel's depth is read: the NaN marks those cells at no cost).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cells = DepthCells(np.array([[1.0, 2.0], [1.0, 2.0]]), reciprocal=True)
+    >>> float(cells.fetch(np.array([0.5]), np.array([0.0]), "clamp")[0])    # 1 / (1/2 + 1/4)
+    1.3333333333333333
+    >>> cells = DepthCells(np.array([[1.0, 2.0], [1.0, np.inf]]), reciprocal=True)
+    >>> float(cells.fetch(np.array([0.5]), np.array([0.0]), "clamp")[0])    # nearest: (0, 1)
+    2.0
+    """
+
+    def __init__(self, depth: np.ndarray, reciprocal: bool):
+        depth = np.asarray(depth, dtype=np.float64)
+        H, W = depth.shape
+        self.shape = (H, W)
+        self.flat = depth.reshape(-1)
+        self.reciprocal = bool(reciprocal)
+        i1 = np.minimum(np.arange(H) + 1, H - 1)
+        j1 = np.minimum(np.arange(W) + 1, W - 1)
+        corners = (depth, depth[:, j1], depth[i1, :], depth[i1][:, j1])
+        ok = np.isfinite(corners[0])
+        for c in corners[1:]:
+            ok &= np.isfinite(c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            v00, v01, v10, v11 = ((1.0 / c) if reciprocal else c for c in corners)
+            coef = np.stack([v00, v01 - v00, v10 - v00, (v11 - v10) - (v01 - v00)], axis=-1)
+        coef[~ok] = np.nan
+        self.coef = coef.reshape(H * W, 4)
+        self.any_background = not ok.all()
+
+    def fetch(self, fx: np.ndarray, fy: np.ndarray, offscreen: str) -> np.ndarray:
+        """Bilinear depth at the finite pixel coordinates (fx + 1/2, fy + 1/2), as
+        ``fetch_depth(..., fetch="bilinear")`` with this image's ``reciprocal``. ``fx`` and
+        ``fy`` (the coordinates relative to the first pixel centre) are overwritten."""
+        H, W = self.shape
+        if offscreen == "open":
+            outside = (fx < -0.5) | (fx >= W - 0.5) | (fy < -0.5) | (fy >= H - 0.5)
+        np.clip(fx, 0.0, W - 1, out=fx)
+        np.clip(fy, 0.0, H - 1, out=fy)
+        j0 = np.floor(fx)
+        i0 = np.floor(fy)
+        fx -= j0                           # tx
+        fy -= i0                           # ty
+        i0 *= W
+        i0 += j0
+        cell = i0.astype(np.intp)          # the cell's flat index (exact in float64)
+        c = self.coef.take(cell, axis=0)
+        # c0 + c1 tx + c2 ty + c3 tx ty
+        v = np.multiply(c[:, 3], fy, out=j0)
+        v += c[:, 1]
+        v *= fx
+        v += np.multiply(c[:, 2], fy, out=i0)
+        v += c[:, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.divide(1.0, v, out=v) if self.reciprocal else v
+        if self.any_background and np.isnan(np.add.reduce(d)):
+            # a background corner (NaN coefficients): the nearest pixel's depth, the cell's
+            # corner nearest to (x, y) = (fx + 1/2, fy + 1/2) (at a clamped edge t is 0 and
+            # the corner the edge pixel)
+            bad = np.flatnonzero(np.isnan(d))
+            i, j = np.divmod(cell[bad], W)
+            i += fy[bad] >= 0.5
+            j += fx[bad] >= 0.5
+            d[bad] = self.flat[i * W + j]
+        if offscreen == "open":
+            d[outside] = np.inf
+        return d
+
+
+def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
+    """F(t) = int_0^t J rho' dt into ``out``, with rho' = h^2 - t^2 (the quadratic falloff
+    without its factor |u|^2 / R^2, applied by the caller) or 1, J = (z_m + t)^2 under
+    perspective and 1 orthographically (``_segment._weights`` gives int_a^b = F(b) - F(a))."""
+    if perspective:
+        if quadratic:
+            # h2 (zz t + z_m t^2 + t^3/3) - (zz t^3/3 + z_m t^4/2 + t^5/5)
+            np.multiply(t, -0.2, out=out)
+            out -= 0.5 * z_m
+            out *= t
+            out += (h2 - zz) / 3.0
+            out *= t
+            out += h2 * z_m
+            out *= t
+            out += h2 * zz
+        else:
+            # zz t + z_m t^2 + t^3/3
+            np.multiply(t, 1.0 / 3.0, out=out)
+            out += z_m
+            out *= t
+            out += zz
+    elif quadratic:
+        # h2 t - t^3/3
+        np.multiply(t, t, out=out)
+        out *= -1.0 / 3.0
+        out += h2
+    else:
+        out[...] = 1.0
+    out *= t
+    return out
+
+
+def _even(z_m, h2, perspective, quadratic):
+    """F(h) + F(-h) (0 orthographically, where J is even in t)."""
+    if not perspective:
+        return 0.0
+    return z_m * h2 * h2 if quadratic else 2.0 * z_m * h2
+
+
+def segment_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
+    """:func:`vobscure.screenspace._segment.ray_kernel` with the bilinear depth of ``cells``
+    (a :class:`DepthCells` of ``px.depth``; None: ``fetch="nearest"``): the same ((k,) V,
+    (k,) exact) within float64 rounding."""
+    k = len(px.index)
+    R = float(radius)
+    a0, a1, b0, b1, exact = ball_box(px, R)
+    px.p, px.n                      # computed once, before the threads read them
+    parts = max(1, min(_threads(), k // MIN_BLOCK))
+    edges = np.linspace(0, k, parts + 1).astype(int)
+
+    def run(sl):
+        return _block(px, sl, a0[sl], a1[sl] - a0[sl], b0[sl], b1[sl] - b0[sl], R, unit, normal_clamp,
+                      thickness, falloff, cells, offscreen, shift[sl])
+    v = np.concatenate(_map(run, [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]))
+    return v, exact
+
+
+def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
+    """The V of the pixels ``sl`` of ``px`` (see :func:`segment_kernel`)."""
+    quadratic = falloff == "quadratic"
+    persp = px.perspective
+    pc = [np.ascontiguousarray(px.p[sl, a]) for a in range(3)]
+    nc = [np.ascontiguousarray(px.n[sl, a]) for a in range(3)]
+    n_p = nc[0] * pc[0] + nc[1] * pc[1] + nc[2] * pc[2]
+    pp = pc[0] * pc[0] + pc[1] * pc[1] + pc[2] * pc[2]
+    RR = R * R
+    RR_pp = RR - pp
+    # the rays' pixel coordinates are finite when the box of rays is
+    finite = all(np.isfinite(q).all() for q in (a0, da, b0, db))
+    if cells is None or not finite:
+        def fetch(fx, fy):
+            return C.fetch_depth(px.depth, fx + 0.5, fy + 0.5, fetch="bilinear" if cells else "nearest",
+                                 offscreen=offscreen, reciprocal=persp)
+    else:
+        def fetch(fx, fy):
+            return cells.fetch(fx, fy, offscreen)
+    cx, cy = px.cx - 0.5, px.cy - 0.5
+    s1 = np.ascontiguousarray(shift[:, 0])
+    s2 = np.ascontiguousarray(shift[:, 1])
+    m = len(a0)
+    acc = np.zeros(m)
+    F_lo, F_b, tmp = np.empty(m), np.empty(m), np.empty(m)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for u1, u2 in unit:
+            ua = u1 + s1
+            ua -= np.floor(ua)
+            ub = u2 + s2
+            ub -= np.floor(ub)
+            a = ua
+            a *= da
+            a += a0
+            b = ub
+            b *= db
+            b += b0
+            # every point of the ray projects here (camera.kernel.project_xy at Z = 1), minus
+            # the half pixel to the first pixel centre
+            fx = px.fx * a
+            fx += cx
+            fy = px.fy * b
+            np.subtract(cy, fy, out=fy)
+            if persp:
+                uu = a * a
+                uu += b * b
+                uu += 1.0
+                up = a * pc[0]
+                up += b * pc[1]
+                up += pc[2]
+                z_m = up / uu
+                h2 = up * z_m
+                h2 += RR_pp
+                h2 /= uu
+                c1 = a * nc[0]
+                c1 += b * nc[1]
+                c1 += nc[2]
+                # the tangent plane n . (X - p) = 0 meets the ray at depth n.p / n.u
+                # (Loos & Sloan 2010, Sec. 4.4), t = cut there
+                zp = n_p / c1
+                cut = zp - z_m
+                if quadratic:
+                    uu_r2 = uu
+                    uu_r2 /= RR
+            else:
+                z_m = pc[2]
+                ex, ey = a - pc[0], b - pc[1]
+                h2 = ex * ex
+                h2 += ey * ey
+                np.subtract(RR, h2, out=h2)
+                c1 = nc[2]
+                # the tangent plane: n . (L(z_m + t) - p) = c0 + c1 t (Sec. 4.4) is 0 at cut
+                cut = nc[0] * ex
+                cut += nc[1] * ey
+                cut /= c1
+                np.negative(cut, out=cut)
+                zp = z_m + cut
+                uu_r2 = 1.0 / RR
+            np.maximum(h2, 0.0, out=h2)
+            h = np.sqrt(h2)
+            mh = np.negative(h)
+            np.clip(cut, mh, h, out=cut)
+            away = c1 > 0          # the half-ball lies beyond the plane along the ray
+            if normal_clamp:
+                lo_seg = np.where(away, cut, mh)
+                hi_seg = np.where(away, h, cut)
+            else:
+                lo_seg, hi_seg = mh, h
+            d = fetch(fx, fy)
+            # Sec. 4 (and 4.3): occupied where max(d, 0) < z (< d + thickness); a depth on
+            # the tangent plane up to rounding starts exactly where the plane does
+            # (under perspective the segment lies in z > 0, so max(d, 0) - z_m and d - z_m
+            # clip to the same lo)
+            lo = d - z_m if persp else np.maximum(d, 0.0) - z_m
+            np.clip(lo, lo_seg, hi_seg, out=lo)
+            q = np.subtract(d, zp, out=zp)                  # d minus the plane's depth
+            np.abs(q, out=q)
+            # (< rather than <=: a background d = inf is not on the plane)
+            on_plane = q < PLANE_RTOL * d
+            if on_plane.any():
+                np.copyto(lo, cut, where=on_plane)          # cut lies in [lo_seg, hi_seg]
+            zz = z_m * z_m if persp else None
+            _antiderivative(lo, z_m, zz, h2, persp, quadratic, F_lo)
+            if thickness is None and not normal_clamp:
+                # occupied [lo, h] minus behind the plane ([cut, h], or [-h, cut] when away)
+                _antiderivative(cut, z_m, zz, h2, persp, quadratic, F_b)
+                if persp and away.any():
+                    np.subtract(_even(z_m, h2, persp, quadratic), F_b, out=F_b, where=away)
+                elif away.any():
+                    np.negative(F_b, out=F_b, where=away)
+                contrib = np.subtract(F_b, F_lo, out=F_b)
+            else:
+                if thickness is None:
+                    hi = hi_seg
+                else:
+                    hi = d + thickness
+                    hi -= z_m
+                    np.clip(hi, lo_seg, hi_seg, out=hi)
+                    np.maximum(hi, lo, out=hi)
+                contrib = _antiderivative(hi, z_m, zz, h2, persp, quadratic, F_b)
+                contrib -= F_lo
+                if not normal_clamp:
+                    F_c = _antiderivative(cut, z_m, zz, h2, persp, quadratic, F_lo)
+                    F_h = _antiderivative(h, z_m, zz, h2, persp, quadratic, tmp)
+                    # below = F(cut) - F(-h) where away, F(h) - F(cut) elsewhere; F(-h) = even - F(h)
+                    below = np.where(away, F_c + F_h - _even(z_m, h2, persp, quadratic), F_h - F_c)
+                    contrib -= below
+            if quadratic:
+                contrib *= uu_r2
+            if not np.isfinite(np.add.reduce(contrib)):
+                contrib[~np.isfinite(contrib)] = 0.0
+            acc += contrib
+    mass = BALL_MASS[falloff] * R ** 3
+    scale = (da * db) / len(unit)
+    if normal_clamp:
+        return 1.0 - scale * acc / (0.5 * mass)
+    # control variate: its scaled mean is mass / 2 exactly (_segment.ray_kernel)
+    return 0.5 - scale * acc / mass
