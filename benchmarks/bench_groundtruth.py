@@ -46,12 +46,12 @@ What is measured (DESIGN.md, "Performance")
    Cornell box (eye (0.2, 1, 0.6) toward (-0.3, 0.7, -1), 60-degree field of view) at
    1280 x 720 (160 x 90 with ``--quick``), the radius
    :func:`~vobscure.experiments.common.default_radius`:
-   ``vo.vo_reference(gb, samples=2048)`` (``vobscure compare``'s default
-   ``screen_samples``) against ``vo.ground_truth(scene, gb, quantity="ao", rays=256)``
+   ``vo.vo_reference(gb, samples=1024)`` (``vobscure compare``'s default
+   ``screen_samples``: view-ray segments) and the point-sampled reference it replaced (2048
+   points, compare's default then) against ``vo.ground_truth(scene, gb, quantity="ao", rays=256)``
    (the cosine AO within the radius, compare's ``ao`` reference). Each is run ONCE, back
    to back (a warm-up call would double minutes of work); the ratio of the two times and
-   the mean reported standard error of each over the covered pixels are printed (and the
-   same for ``samples=512``). Goal:
+   the mean reported standard error of each over the covered pixels are printed. Goal:
    the reference takes at most the AO's time (ratio <= 1).
 
 Run from the repository root::
@@ -69,6 +69,7 @@ The exit code is 0 unless something raises; no timing is asserted.
 
 from __future__ import annotations
 
+import inspect
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -82,7 +83,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))      # the shared _benc
 import _bench  # noqa: E402
 import vobscure as vo  # noqa: E402
 from _bench import Timing, interleaved  # noqa: E402
+from vobscure.estimate import DEFAULT_GROUPS  # noqa: E402
 from vobscure.experiments.common import RADIUS_FRACTION, default_radius  # noqa: E402
+from vobscure.experiments.compare import compare  # noqa: E402
+from vobscure.screenspace.point import _reference  # noqa: E402
 from vobscure.groundtruth import DEFAULT_GROUPS  # noqa: E402
 from vobscure.raytrace import default_threads  # noqa: E402
 from vobscure.sampling import shifted_hemisphere_directions, sobol_base  # noqa: E402
@@ -100,9 +104,10 @@ GOAL_GBUFFER = 2.0
 GOAL_GROUND_TRUTH_SECONDS = 60.0
 #: Benchmark 4: compare's default points per pixel of the screen-space reference, the view
 #: inside the Cornell box, and the goal on the reference's time over the ray-cast AO's.
-SCREEN_SAMPLES = 2048
-#: A smaller count of rays, printed too: its mean stderr against the 2048's and the AO's.
-SCREEN_SAMPLES_FEW = 512
+SCREEN_SAMPLES = inspect.signature(compare).parameters["screen_samples"].default
+#: The points per pixel of the point-sampled reference that the view-ray segments replaced
+#: (compare's default then): printed for its time and standard error beside the segments'.
+POINT_SAMPLES = 2048
 INSIDE_VIEW = dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0)
 INSIDE_SIZES = {False: (1280, 720), True: (160, 90)}
 GOAL_SCREEN_OVER_AO = 1.0
@@ -347,16 +352,18 @@ def bench_screen_reference(quick: bool, threads, report: Report):
     ref = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)
     screen_s = time.perf_counter() - start
     start = time.perf_counter()
-    few = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES_FEW, seed=SEED)
-    few_s = time.perf_counter() - start
+    points = _reference(gb, radius=radius, samples=POINT_SAMPLES, seed=SEED, along="point", normal_clamp=False,
+                        thickness=None, falloff="constant", fetch="bilinear", offscreen="clamp",
+                        groups=DEFAULT_GROUPS, progress=False)
+    points_s = time.perf_counter() - start
     start = time.perf_counter()
     ao = vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED, threads=threads)
     ao_s = time.perf_counter() - start
     valid = gb.valid
     report.row(f"vo_reference(samples={SCREEN_SAMPLES})", screen_s, None, screen_s / ao_s,
                f"mean stderr {float(np.mean(ref.stderr[valid])):.5f}")
-    report.row(f"vo_reference(samples={SCREEN_SAMPLES_FEW})", few_s, None, few_s / ao_s,
-               f"mean stderr {float(np.mean(few.stderr[valid])):.5f}")
+    report.row(f"point-sampled reference ({POINT_SAMPLES} points)", points_s, None, points_s / ao_s,
+               f"mean stderr {float(np.mean(points.stderr[valid])):.5f}")
     report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None,
                f"mean stderr {float(np.mean(ao.stderr[valid])):.5f}")
     report.goal(f"[{scene.name} inside {size[0]}x{size[1]}] vo_reference / ground_truth ao (time)",
