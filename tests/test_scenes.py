@@ -742,3 +742,34 @@ def test_obj_relative_indices_refer_to_the_vertices_defined_so_far(tmp_path):
     same = scenes.load(absolute)
     for name in ("low", "high"):
         np.testing.assert_array_equal(scene.meshes[name].triangles, same.meshes[name].triangles)
+
+
+def test_gltf_mesh_of_several_primitives_loads_with_the_same_names_every_time(tmp_path):
+    # one node whose mesh has two primitives: trimesh names each primitive's frame with a random
+    # suffix; the scene's mesh names (and so the cache's scene digest) must not change per load
+    import base64
+    import json
+    import struct
+
+    from vobscure.experiments.cache import scene_digest
+
+    positions = [0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1]
+    blob = struct.pack("<18f", *positions)
+    gltf = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "pair", "mesh": 0}],
+        "meshes": [{"name": "two", "primitives": [{"attributes": {"POSITION": 0}},
+                                                  {"attributes": {"POSITION": 1}}]}],
+        "buffers": [{"byteLength": len(blob),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": 36}],
+        "accessors": [{"bufferView": k, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0 + k], "max": [1, 1, 0 + k]} for k in (0, 1)],
+    }
+    path = tmp_path / "pair.gltf"
+    path.write_text(json.dumps(gltf))
+    first, second = scenes.load(path), scenes.load(path)
+    assert len(first.meshes) == 2 and list(first.meshes) == list(second.meshes)
+    assert all(name.startswith("pair/") for name in first.meshes)
+    assert scene_digest(first) == scene_digest(second)

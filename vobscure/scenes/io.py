@@ -439,6 +439,22 @@ def _gltf_face_alpha(path: Path, parts, notes: _Notes) -> list:
     return out
 
 
+#: The random suffix trimesh's glTF loader gives the frame of each primitive of a mesh with
+#: several (``<node>_<6 random hex digits>``, trimesh.exchange.gltf, ``util.unique_id``).
+_RANDOM_FRAME = re.compile(r"^(?P<parent>.+)_[0-9a-f]{6}$")
+
+
+def _node_name(graph, node, geometry_name) -> str:
+    """A scene-graph node's name, the same on every load: a primitive's frame that trimesh
+    named with a random suffix is named after its parent node and its geometry instead (so
+    that mesh names, their order and the cache's scene digest do not change between loads)."""
+    match = _RANDOM_FRAME.match(str(node))
+    parent = graph.transforms.parents.get(node)
+    if match and parent is not None and match["parent"] == str(parent):
+        return f"{parent}/{geometry_name}"
+    return str(node)
+
+
 def _parts(loaded, stem: str) -> list[tuple[str, np.ndarray, np.ndarray, trimesh.Trimesh]]:
     """(name, vertices (n, 3) float64 in world space, faces (m, 3) int64, the trimesh geometry)
     per triangle mesh. The faces index the geometry's vertices, reversed where a mirroring
@@ -452,10 +468,11 @@ def _parts(loaded, stem: str) -> list[tuple[str, np.ndarray, np.ndarray, trimesh
         items = [(stem, np.eye(4), loaded)]
     elif isinstance(loaded, trimesh.Scene):
         items = []
-        for node in sorted(loaded.graph.nodes_geometry):
+        for node in loaded.graph.nodes_geometry:
             transform, geometry_name = loaded.graph[node]
-            items.append((str(node), np.asarray(transform, dtype=np.float64),
+            items.append((_node_name(loaded.graph, node, geometry_name), np.asarray(transform, dtype=np.float64),
                           loaded.geometry[geometry_name]))
+        items.sort(key=lambda item: item[0])
     else:
         items = []
     items = [(n, t, g) for n, t, g in items
