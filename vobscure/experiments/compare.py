@@ -44,7 +44,7 @@ from .common import (choose_radius, machine, markdown_table, new_figure, save_fi
 from .sweeps import REFERENCES, InlineExecutor, SweepConfig, sweep
 
 __all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front", "orbit_cameras", "parse_methods",
-           "open_meshes", "missing_note", "panel_reference",
+           "missing_note", "panel_reference",
            "DEFAULT_METHODS", "DEFAULT_REFERENCES", "REFERENCES", "TARGET_FACTOR", "SUGGEST_THICKNESS"]
 
 #: The paper's Table 1 configurations (Loos & Sloan 2010): points 12 and 33, lines 5 and 9, area 1.
@@ -199,12 +199,6 @@ def _as_cache(cache):
     return ReferenceCache(cache)
 
 
-def open_meshes(scene) -> list[str]:
-    """The names of the scene's meshes that bound no solid (:attr:`vobscure.scenes.Scene.open_meshes`:
-    not closed, not consistently wound, or alpha-tested with holes)."""
-    return list(scene.open_meshes)
-
-
 def _names(items, limit: int = 6) -> str:
     items = list(items)
     shown = ", ".join(items[:limit])
@@ -222,7 +216,7 @@ def missing_note(missing: dict, scene, thickness=None) -> str:
     >>> print(missing_note({"volumetric": None}, vo.scenes.leaf_cloud()))  # doctest: +ELLIPSIS
     No 'volumetric' reference: it tells solid from empty space by an inside test, which needs closed meshes, and 1 of 1 mesh(es) are open or alpha-tested with holes (leaves).
     """
-    bad = open_meshes(scene)
+    bad = scene.open_meshes
     parts = []
     for name, stand in missing.items():
         why = (f"No {name!r} reference: it tells solid from empty space by an inside test, which needs closed "
@@ -403,7 +397,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     for name in references:
         check_choice(name, "references", _references.names())
         if not frame and not allow_open and _references.usable(name, sc) != name:
-            bad = open_meshes(sc)
+            bad = sc.open_meshes
             stand = _references.get(name).stand_in
             raise ValueError(f"reference {name!r} needs closed meshes (an inside test), and {len(bad)} of "
                              f"{len(sc.meshes)} mesh(es) of {scene_name!r} are open ({_names(bad)}); use "
@@ -482,7 +476,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
     if missing:
         summary["text"].insert(0, missing_note(missing, sc, thickness))
-    summary["missing_references"] = {k: dict(stand_in=v, open_meshes=open_meshes(sc)) for k, v in missing.items()}
+    summary["missing_references"] = {k: dict(stand_in=v, open_meshes=list(sc.open_meshes)) for k, v in missing.items()}
     if frame:
         summary["text"].insert(0, "A G-buffer without its scene: the converged screen-space VO is the only "
                                   "reference possible (nothing can be ray cast), so these errors are the "

@@ -212,12 +212,10 @@ def _source(path: Path, ext: str) -> dict:
     so far)."""
     if ext != ".obj":
         return dict(file_obj=str(path), file_type=ext[1:])
-    data = path.read_bytes()
-    if not _RELATIVE_INDEX.search(data):
-        return dict(file_obj=str(path), file_type="obj")
-    text = absolute_obj_indices(data.decode("utf-8", errors="replace"))
-    return dict(file_obj=io.BytesIO(text.encode("utf-8")), file_type="obj",
-                resolver=trimesh.resolvers.FilePathResolver(str(path)))
+    data = path.read_bytes()        # read once: trimesh parses these bytes, not the file again
+    if _RELATIVE_INDEX.search(data):
+        data = absolute_obj_indices(data.decode("utf-8", errors="replace")).encode("utf-8")
+    return dict(file_obj=io.BytesIO(data), file_type="obj", resolver=trimesh.resolvers.FilePathResolver(str(path)))
 
 
 def absolute_obj_indices(text: str) -> str:
