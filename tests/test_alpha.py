@@ -465,8 +465,9 @@ def test_load_bad_material_names_file_material_mesh(tmp_path, case):
     assert scene.tracer.occluded(o, d, 1.0).all()
 
 
-def test_load_gltf_texcoord_1_is_named(tmp_path):
-    """A base colour texture read through TEXCOORD_1 cannot be honoured: named, solid."""
+def _masked_card_gltf():
+    """The files of a .gltf export of one card with an alpha-masked base colour texture (as
+    trimesh writes them) and its parsed JSON header, for a test to alter."""
     import json
 
     from PIL import Image
@@ -477,7 +478,14 @@ def test_load_gltf_texcoord_1_is_named(tmp_path):
         name="leaf", alphaMode="MASK", baseColorTexture=Image.fromarray(np.zeros((4, 4, 4), np.uint8), "RGBA"))
     card.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
     files = trimesh.Scene({"card": card}).export(file_type="gltf")
-    header = json.loads(files["model.gltf"])
+    return files, json.loads(files["model.gltf"])
+
+
+def test_load_gltf_texcoord_1_is_named(tmp_path):
+    """A base colour texture read through TEXCOORD_1 cannot be honoured: named, solid."""
+    import json
+
+    files, header = _masked_card_gltf()
     header["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1
     files["model.gltf"] = json.dumps(header).encode()
     for name, data in files.items():
@@ -528,15 +536,7 @@ def test_load_gltf_missing_texture_is_named(tmp_path):
     """A .gltf whose base colour image file is missing: named, loaded solid."""
     import json
 
-    from PIL import Image
-
-    card, _ = _card(np.ones((1, 1)))
-    uv = np.column_stack([card.vertices[:, 0] + 0.5, card.vertices[:, 2] + 0.5])
-    material = trimesh.visual.material.PBRMaterial(
-        name="leaf", alphaMode="MASK", baseColorTexture=Image.fromarray(np.zeros((4, 4, 4), np.uint8), "RGBA"))
-    card.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
-    files = trimesh.Scene({"card": card}).export(file_type="gltf")
-    header = json.loads(files["model.gltf"])
+    files, header = _masked_card_gltf()
     header["images"] = [{"uri": "leaf_missing.png"}]
     files["model.gltf"] = json.dumps(header).encode()
     for name, data in files.items():
