@@ -81,6 +81,10 @@ class GBuffer:
         (``p_view = R p_world + t``) to use instead of the camera's pose.
     conversion : dict, optional
         What :meth:`from_arrays` did (see there); None for rendered G-buffers.
+    intervals : SolidIntervals, optional
+        The solid intervals along the pixels' rays (:class:`vobscure.layers.SolidIntervals`,
+        of the image's shape), for the estimators' ``thickness="layers"``; None: only the
+        first surface is known.
 
     Attributes
     ----------
@@ -106,10 +110,12 @@ class GBuffer:
     conversion : dict or None
         For a G-buffer made by :meth:`from_arrays`, what the conversion touched (counts of
         pixels); None for a rendered one.
+    intervals : SolidIntervals or None
+        The solid intervals, when known (see :meth:`with_intervals`).
     """
 
     def __init__(self, camera, *, depth, normal, valid, primitive, hits, dtype=np.float64,
-                 view_to_world=None, conversion=None):
+                 view_to_world=None, conversion=None, intervals=None):
         if normal is None:
             raise ValueError("a GBuffer needs normals (normal_clamp and the ground truth read them); "
                              "GBuffer.from_arrays(depth, camera=...) derives them from the depth")
@@ -122,6 +128,35 @@ class GBuffer:
         self._hit_source = hits
         self._view_to_world = view_to_world
         self.conversion = conversion
+        self.intervals = None if intervals is None else self._checked_intervals(intervals)
+
+    def _checked_intervals(self, intervals):
+        from .layers import SolidIntervals
+
+        if not isinstance(intervals, SolidIntervals):
+            raise ValueError(f"intervals must be a vobscure.layers.SolidIntervals, got {type(intervals).__name__}")
+        if intervals.shape != self.depth.shape:
+            raise ValueError(f"intervals must have the image's shape {self.depth.shape}, got {intervals.shape}")
+        return intervals.astype(self.dtype) if intervals.dtype != self.dtype else intervals
+
+    def with_intervals(self, intervals) -> "GBuffer":
+        """The same G-buffer with the solid intervals ``intervals`` (a
+        :class:`vobscure.layers.SolidIntervals` of the image's shape, or None to drop them).
+
+        Examples
+        --------
+        >>> import numpy as np, vobscure as vo
+        >>> from vobscure.layers import SolidIntervals
+        >>> cam = vo.Camera.look_at((0, 3, 0), (0, 0, 0), up=(0, 0, -1), size=(4, 4), ortho_height=2.0)
+        >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+        >>> front = gb.depth[None]
+        >>> layered = gb.with_intervals(SolidIntervals(front, front + 0.5))
+        >>> layered.intervals.count, gb.intervals is None
+        (1, True)
+        """
+        return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
+                       primitive=self.primitive, hits=self._hit_source, dtype=self.dtype,
+                       view_to_world=self._view_to_world, conversion=self.conversion, intervals=intervals)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -395,7 +430,8 @@ class GBuffer:
         hits = None if self._hit_source is None else self.hits
         return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
                        primitive=self.primitive, hits=hits, dtype=dtype,
-                       view_to_world=self._view_to_world, conversion=self.conversion)
+                       view_to_world=self._view_to_world, conversion=self.conversion,
+                       intervals=self.intervals)
 
     def __repr__(self) -> str:
         H, W = self.shape
