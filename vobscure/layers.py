@@ -230,7 +230,8 @@ class PeeledLayers:
         return f"PeeledLayers({self.count} per pixel, {W}x{H})"
 
 
-def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None) -> SolidIntervals:
+def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None,
+                          origin_inside=None) -> SolidIntervals:
     """The solid intervals of peeled layers, by the enter/leave rule.
 
     Along each pixel's ray the surfaces are read in order with one state, inside or outside:
@@ -240,8 +241,12 @@ def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None)
       coincided with this surface, as where a box stands on a floor);
     - leaving from inside closes the interval; leaving from outside extends the previous
       interval to this depth (a solid whose entry coincided with the previous surface and was
-      skipped, or overlapping solids) or, when there is none, opens one at the near plane
-      z = 0: the camera is inside that solid;
+      skipped, or overlapping solids). When there is no previous interval (the first surface
+      leaves a solid) and the ray's origin is inside that solid (``origin_inside``), the camera
+      is inside it: the interval starts at the near plane z = 0. Otherwise the entry coincided
+      with this very surface (a ray through the edge of a face that touches another solid's,
+      where the tracer may report either): the interval starts here, ``[z, z]``, and the next
+      leave extends it;
     - a surface of an open mesh (``open_surface``) bounds no solid: seen from outside it is a
       zero-thickness interval ``[z, z]`` (a surface of no depth, which an occupancy test never
       counts but which tells a thickness estimate that nothing solid lies behind it); inside
@@ -261,6 +266,10 @@ def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None)
     depth : (K, H, W) array_like of float, optional
         The layers' depths at a higher precision than the stored float32 (the renderer passes
         its float64 depths); default ``layers.depth``.
+    origin_inside : (H, W) array_like of bool, optional
+        Where the first surface leaves a solid: whether the ray's origin (the camera) is inside
+        that solid (the renderer asks the mesh, ``trimesh.Trimesh.contains``). Default: True
+        everywhere (a first leave means the camera is inside).
 
     Returns
     -------
@@ -285,15 +294,24 @@ def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None)
     z = layers.depth if depth is None else np.asarray(depth)
     if z.shape != (K, H, W):
         raise ValueError(f"depth must have the layers' shape {(K, H, W)}, got {z.shape}")
+    inside = None
+    if origin_inside is not None:
+        inside = np.asarray(origin_inside)
+        if inside.shape != (H, W) or inside.dtype != bool:
+            raise ValueError(f"origin_inside must be a bool array of shape {(H, W)}, got "
+                             f"{inside.dtype} of shape {inside.shape}")
+        inside = inside.reshape(-1)
     front, back = _interval_slots(z.reshape(K, -1), layers.primitive.reshape(K, -1) >= 0,
-                                  layers.entering.reshape(K, -1), layers.open_surface.reshape(K, -1))
+                                  layers.entering.reshape(K, -1), layers.open_surface.reshape(K, -1),
+                                  inside)
     M = front.shape[0]
     return SolidIntervals(front.reshape(M, H, W), back.reshape(M, H, W), dtype=dtype, layers=layers)
 
 
-def _interval_slots(z, hit, entering, open_surface) -> tuple[np.ndarray, np.ndarray]:
+def _interval_slots(z, hit, entering, open_surface, origin_inside=None) -> tuple[np.ndarray, np.ndarray]:
     """(front, back) of shape (M, n) float64 from K layers of n rays (see
-    :func:`intervals_from_layers`); M the most intervals of any ray, at least 1."""
+    :func:`intervals_from_layers`; ``origin_inside`` (n,) bool or None for all True); M the
+    most intervals of any ray, at least 1."""
     K, n = z.shape
     z = np.maximum.accumulate(np.asarray(z, dtype=np.float64), axis=0)   # rounding never reorders
     front = np.full((K, n), np.inf)
@@ -318,10 +336,12 @@ def _interval_slots(z, hit, entering, open_surface) -> tuple[np.ndarray, np.ndar
         stray = leave & ~inside                                   # a leave without its entry
         extend = np.flatnonzero(stray & (used > 0))
         back[used[extend] - 1, extend] = zk[extend]
-        camera = np.flatnonzero(stray & (used == 0))              # the camera is inside
-        front[0, camera] = 0.0
-        back[0, camera] = zk[camera]
-        used[camera] = 1
+        first = np.flatnonzero(stray & (used == 0))               # no interval before it
+        camera = first if origin_inside is None else first[origin_inside[first]]
+        front[0, first] = zk[first]                                # the entry was here...
+        front[0, camera] = 0.0                                     # ...or the camera is inside
+        back[0, first] = zk[first]
+        used[first] = 1
         inside = (inside | opening) & ~leave
     unseen = np.flatnonzero(inside)                               # the layers ran out inside
     front[used[unseen], unseen] = start[unseen]

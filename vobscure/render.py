@@ -178,8 +178,26 @@ class _Peeling:
             self._store(k, offset + going[h], prim, (p - camera.eye) @ camera.forward, d64, z_band, going[h])
         opened = None if self.open_surface is None else self.open_surface[:, offset:offset + n]
         hit = self.primitive[:, offset:offset + n] >= 0
-        self.pieces[offset] = _interval_slots(z_band, hit, self.entering[:, offset:offset + n],
-                                              np.zeros_like(hit) if opened is None else opened)
+        entering = self.entering[:, offset:offset + n]
+        opened = np.zeros_like(hit) if opened is None else opened
+        self.pieces[offset] = _interval_slots(z_band, hit, entering, opened,
+                                              self._origin_inside(origins, hit[0] & ~opened[0] & ~entering[0],
+                                                                  self.primitive[0, offset:offset + n]))
+
+    def _origin_inside(self, origins, first_leaves, prim) -> np.ndarray:
+        """(n,) bool: where the first surface leaves a solid, whether the ray's origin is inside
+        that surface's mesh (trimesh's ``contains``, once per distinct origin and mesh)."""
+        out = np.zeros(len(first_leaves), dtype=bool)
+        rays = np.flatnonzero(first_leaves)
+        if not len(rays):
+            return out
+        names = list(self.scene.meshes)
+        mesh = self.scene.mesh_index[prim[rays]]
+        for m in np.unique(mesh):
+            sel = rays[mesh == m]
+            points, which = np.unique(np.asarray(origins[sel], dtype=np.float64), axis=0, return_inverse=True)
+            out[sel] = self.scene.meshes[names[m]].contains(points)[which.reshape(-1)]
+        return out
 
     def intervals(self, H, W):
         from .layers import PeeledLayers, SolidIntervals
