@@ -270,3 +270,60 @@ def test_inside_agrees_with_the_scenes_inside_test():
 def test_bad_layers(layers):
     with pytest.raises(ValueError, match="layers must be an integer >= 1"):
         vo.render_gbuffer(vo.scenes.slab(), _down(), layers=layers)
+
+
+# ------------------------------------------------------------------ an engine's back-face pass
+def _ndc(z, n, f):
+    """OpenGL's window depth in [-1, 1] of linear depth z (glFrustum)."""
+    return (f + n) / (f - n) - 2 * f * n / ((f - n) * z)
+
+
+@pytest.mark.parametrize("kind", ["linear", "ndc", "reversed", "distance"])
+def test_back_depth_is_one_interval(kind):
+    """A back-face pass of the closed box, encoded as an engine would store it, read back as
+    the box's interval found by the peeling."""
+    scene = vo.Scene(_box((-3, -0.5, -3), (3, 0.25, 3)))
+    cam = _perspective()
+    peeled = vo.render_gbuffer(scene, cam, layers=2)
+    z_f, z_b = peeled.depth, peeled.intervals.back[0]
+    n, f = 0.5, 10.0
+    rays = np.linalg.norm(cam.unproject(cam.pixel_centers(), 1.0), axis=-1)
+    encode = {"linear": lambda z: z, "ndc": lambda z: _ndc(z, n, f),
+              "reversed": lambda z: n / (n - f) - f * n / ((n - f) * z), "distance": lambda z: z * rays}[kind]
+    gb = vo.GBuffer.from_arrays(encode(z_f), camera=cam, depth_kind=kind, near=n, far=f, back_depth=encode(z_b))
+    s = gb.intervals
+    assert s.count == 1 and s.layers is None
+    # the encodings round-trip to ~1e-15 relative in float64
+    np.testing.assert_allclose(s.front[0], z_f, rtol=1e-12)
+    np.testing.assert_allclose(s.back[0], z_b, rtol=1e-12)
+    assert gb.conversion["back_clamped"] == 0 and gb.conversion["back_background"] == 0
+
+
+def test_back_depth_background_clamp_and_errors():
+    cam = _down(size=(4, 3))
+    front = np.full((3, 4), 2.0)
+    front[0, 0] = np.inf                         # background pixel
+    back = np.full((3, 4), 2.5)
+    back[1, 1] = np.nan                          # no back face seen: +inf
+    back[1, 2] = 1e10                            # background by the threshold: +inf
+    back[2, 3] = 2.0 - 1e-9                      # in front of the front by rounding: clamped
+    gb = vo.GBuffer.from_arrays(front, camera=cam, back_depth=back, background=1e9)
+    s = gb.intervals
+    assert np.isinf(s.front[0, 0, 0]) and np.isinf(s.back[0, 0, 0])
+    assert np.isinf(s.back[0, 1, 1]) and np.isinf(s.back[0, 1, 2])
+    assert s.back[0, 2, 3] == 2.0 and s.back[0, 2, 2] == 2.5
+    assert gb.conversion["back_background"] == 2 and gb.conversion["back_clamped"] == 1
+    # rows stored bottom-up are flipped like the depth
+    up = vo.GBuffer.from_arrays(front[::-1], camera=cam, back_depth=back[::-1], background=1e9, origin="lower")
+    assert np.array_equal(up.intervals.back, s.back)
+    # float32 frames give float32 intervals
+    assert vo.GBuffer.from_arrays(front.astype(np.float32), camera=cam, back_depth=back).intervals.dtype == np.float32
+    with pytest.raises(ValueError, match="back_depth must have shape"):
+        vo.GBuffer.from_arrays(front, camera=cam, back_depth=np.ones((4, 3)))
+    with pytest.raises(ValueError, match="back_depth must give a positive linear depth"):
+        vo.GBuffer.from_arrays(front, camera=cam, back_depth=-back)
+    with pytest.raises(ValueError, match=r"back_depth \(depth_kind='ndc01'\) must lie in"):
+        vo.GBuffer.from_arrays(np.full((3, 4), 0.5), camera=cam, depth_kind="ndc01", near=1, far=3,
+                               back_depth=np.full((3, 4), -0.5))
+    assert vo.GBuffer.from_arrays(front, camera=cam).intervals is None
+    assert "back_clamped" not in vo.GBuffer.from_arrays(front, camera=cam).conversion
