@@ -16,7 +16,11 @@ import numpy as np
 
 from .gbuffer import GBuffer
 
-__all__ = ["render_gbuffer"]
+__all__ = ["render_gbuffer", "PEEL_RAYS"]
+
+#: Rays peeled together (all their layers, then their intervals): bounds the temporaries of
+#: ``render_gbuffer(layers=K)`` to a few megabytes per thread whatever the image's size.
+PEEL_RAYS = 4096
 
 
 def render_gbuffer(scene, camera, *, layers: int = 1) -> GBuffer:
@@ -153,13 +157,25 @@ class _Peeling:
             self.open_surface[k, flat] = self.open_triangle[prim]
 
     def band(self, offset, origins, dirs, hits, local, depth0):
+        """Peel a band's rays (flat pixels ``offset`` on) in chunks of :data:`PEEL_RAYS`, so that
+        the temporaries are bounded whatever the band's size."""
+        from .raytrace import Hits
+
+        z0 = np.full(len(dirs), np.inf)
+        z0[local] = depth0
+        for a in range(0, len(dirs), PEEL_RAYS):
+            s = slice(a, min(a + PEEL_RAYS, len(dirs)))
+            self._chunk(offset + a, origins[s], dirs[s],
+                        Hits(hits.distance[s], hits.primitive[s], hits.barycentric[s]), z0[s])
+
+    def _chunk(self, offset, origins, dirs, hits, z0):
         from .layers import _interval_slots
 
         scene, camera, tracer = self.scene, self.camera, self.scene.tracer
         n = len(dirs)
         z_band = np.full((self.K, n), np.inf)
-        prim = hits.primitive[local]
-        self._store(0, offset + local, prim, depth0, dirs[local].astype(np.float64), z_band, local)
+        h = np.flatnonzero(hits.hit)
+        self._store(0, offset + h, hits.primitive[h], z0[h], dirs[h].astype(np.float64), z_band, h)
         going, o, d = np.arange(n), origins, dirs
         for k in range(1, self.K):
             keep = np.flatnonzero(hits.hit)
