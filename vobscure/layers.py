@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SolidIntervals", "PeeledLayers", "intervals_from_layers"]
+__all__ = ["SolidIntervals", "PeeledLayers", "intervals_from_layers", "ray_intervals"]
 
 
 class SolidIntervals:
@@ -301,17 +301,39 @@ def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None,
             raise ValueError(f"origin_inside must be a bool array of shape {(H, W)}, got "
                              f"{inside.dtype} of shape {inside.shape}")
         inside = inside.reshape(-1)
-    front, back = _interval_slots(z.reshape(K, -1), layers.primitive.reshape(K, -1) >= 0,
+    front, back = ray_intervals(z.reshape(K, -1), layers.primitive.reshape(K, -1) >= 0,
                                   layers.entering.reshape(K, -1), layers.open_surface.reshape(K, -1),
                                   inside)
     M = front.shape[0]
     return SolidIntervals(front.reshape(M, H, W), back.reshape(M, H, W), dtype=dtype, layers=layers)
 
 
-def _interval_slots(z, hit, entering, open_surface, origin_inside=None) -> tuple[np.ndarray, np.ndarray]:
-    """(front, back) of shape (M, n) float64 from K layers of n rays (see
-    :func:`intervals_from_layers`; ``origin_inside`` (n,) bool or None for all True); M the
-    most intervals of any ray, at least 1."""
+def ray_intervals(z, hit, entering, open_surface, origin_inside=None) -> tuple[np.ndarray, np.ndarray]:
+    """The enter/leave rule of :func:`intervals_from_layers` on flat arrays of n rays.
+
+    Parameters
+    ----------
+    z : (K, n) array_like of float
+        View depth of each ray's k-th surface (+inf where none).
+    hit, entering, open_surface : (K, n) array_like of bool
+        Whether there is a k-th surface, whether the ray enters a solid there, whether it is
+        open (see :class:`PeeledLayers`).
+    origin_inside : (n,) array_like of bool, optional
+        As in :func:`intervals_from_layers`; None: all True.
+
+    Returns
+    -------
+    front, back : (M, n) float64
+        M the most intervals of any ray, at least 1; unused slots +inf.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f, b = ray_intervals(np.array([[1.0], [2.0]]), np.ones((2, 1), bool),
+    ...                      np.array([[True], [False]]), np.zeros((2, 1), bool))
+    >>> f.tolist(), b.tolist()
+    ([[1.0]], [[2.0]])
+    """
     K, n = z.shape
     z = np.maximum.accumulate(np.asarray(z, dtype=np.float64), axis=0)   # rounding never reorders
     front = np.full((K, n), np.inf)

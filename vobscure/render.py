@@ -169,7 +169,7 @@ class _Peeling:
                         Hits(hits.distance[s], hits.primitive[s], hits.barycentric[s]), z0[s])
 
     def _chunk(self, offset, origins, dirs, hits, z0):
-        from .layers import _interval_slots
+        from .layers import ray_intervals
 
         scene, camera, tracer = self.scene, self.camera, self.scene.tracer
         n = len(dirs)
@@ -196,7 +196,7 @@ class _Peeling:
         hit = self.primitive[:, offset:offset + n] >= 0
         entering = self.entering[:, offset:offset + n]
         opened = np.zeros_like(hit) if opened is None else opened
-        self.pieces[offset] = _interval_slots(z_band, hit, entering, opened,
+        self.pieces[offset] = ray_intervals(z_band, hit, entering, opened,
                                               self._origin_inside(origins, hit[0] & ~opened[0] & ~entering[0],
                                                                   self.primitive[0, offset:offset + n]))
 
