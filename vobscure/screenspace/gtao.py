@@ -81,6 +81,16 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
         XeGTAO's thin-occluder compensation (>= 0, default 0): the distance tested against
         the radius stretches the tap's depth offset by (1 + thin_occluder), so occluders far
         in front of or behind p drop out sooner.
+    thickness : None or "layers", optional
+        ``"layers"``: the occluders' true thickness from the G-buffer's solid intervals
+        (``gbuffer.intervals``, from ``render_gbuffer(..., layers=K)`` or
+        :meth:`vobscure.GBuffer.with_intervals`). A tap's occluder spans its view ray from the
+        tapped depth to the back of the first solid interval of the tapped pixel that ends at
+        or behind that depth; a tap whose occluder lies wholly above the current horizon (the
+        horizon's line passes behind the occluder's back) does not raise the horizon, so light
+        passes behind thin objects (Notes). Default None: every tap is a solid down to
+        infinity, as the depth buffer says. Independent of ``thin_occluder``, which still
+        applies to the distance test.
     power : float, optional
         The visibility is raised to this power (> 0, default 1). XeGTAO ships 2.2
         (``FinalValuePower``), an artistic darkening; it biases the estimate.
@@ -122,7 +132,8 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     Raises
     ------
     ValueError
-        If an argument is out of range or of the wrong type; the message names it.
+        If an argument is out of range or of the wrong type (``thickness`` neither None nor
+        ``"layers"``, or ``"layers"`` on a G-buffer without intervals); the message names it.
 
     Notes
     -----
@@ -144,6 +155,24 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     the taps lie exactly in it. Each tap is snapped to a pixel centre (nearest fetch) and
     its view-space position is reconstructed there. Under perspective the slices are
     uniform around the view axis, not around v, an approximation the paper shares.
+
+    With ``thickness="layers"`` the horizon search runs near to far along each side as
+    without; at a tap with occluder [d, b] along its view ray (b the back of the tapped pixel's
+    interval, nearest pixel, whatever ``fetch``), the points of that segment, seen from p,
+    have horizon cosines falling from the front's to the back's. If the back's cosine exceeds
+    the current horizon's, the current horizon's line crosses the tap's ray behind b: the
+    occluder is separated from the horizon by open space, and the tap is dropped (the rule
+    of the thickness variants of horizon methods, which treat a tap whose sample lies behind
+    the object's back as not occluding). Otherwise the tap raises the horizon to its front as
+    usual. A single maximum horizon per side cannot represent what the layers describe
+    beyond that: an occluder dropped this way is not counted at all (it blocks the arc
+    between its back's and its front's angles, which the estimate reads open, so it errs
+    towards open), and a gap below an occluder that has raised the horizon stays closed
+    (light through a gap and then blocked again is not seen). It equals the depth buffer's
+    GTAO where every interval is ``[d, +inf)``. With ``fetch="bilinear"`` a tap across a
+    silhouette reads a depth interpolated between the two surfaces, in neither's interval:
+    it takes the back of the interval behind it (``docs/screenspace.md``, "Thickness from
+    layers").
 
     To match XeGTAO's defaults set ``falloff_range=0.615, power=2.2, normal_fudge=0.05``
     and use its ``RadiusMultiplier`` 1.457 on the radius; XeGTAO also clamps the output
@@ -169,6 +198,14 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     1.0
     >>> round(float(gtao(gb, radius=0.3, slices=3)[4, 4]), 3)
     0.999
+
+    Solid intervals from every surface to infinity are what the depth buffer assumes:
+
+    >>> import numpy as np
+    >>> from vobscure.layers import SolidIntervals
+    >>> solid = gb.with_intervals(SolidIntervals(gb.depth[None], np.full((1, 8, 8), np.inf)))
+    >>> bool(np.array_equal(gtao(solid, radius=0.3, thickness="layers"), gtao(gb, radius=0.3), equal_nan=True))
+    True
     """
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
@@ -198,7 +235,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
     Parameters
     ----------
-    gbuffer, radius, slices, steps, falloff_range, thin_occluder, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
+    gbuffer, radius, slices, steps, falloff_range, thin_occluder, thickness, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
         As in :func:`gtao` (``power`` does not apply to a direction).
 
     Returns
