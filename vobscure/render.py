@@ -16,17 +16,24 @@ from .gbuffer import GBuffer
 __all__ = ["render_gbuffer"]
 
 
-def render_gbuffer(scene, camera) -> GBuffer:
+def render_gbuffer(scene, camera, *, guard: int = 0) -> GBuffer:
     """Render a G-buffer of ``scene`` seen by ``camera`` (one Embree ray per pixel centre).
 
     Parameters
     ----------
     scene : Scene or trimesh.Trimesh
     camera : Camera
+    guard : int, optional
+        A guard band of this many pixels on each side (default 0, none): the frame of
+        :meth:`camera.widened(guard) <vobscure.Camera.widened>` is rendered (the same focal
+        length, the same rays for the inner pixels), so that the screen-space estimators'
+        taps near the edge read real depth; they and the ground truth return the inner
+        frame (``camera``'s), and :meth:`GBuffer.inner` crops the G-buffer.
 
     Returns
     -------
     GBuffer
+        Of ``camera.widened(guard)``'s shape, with ``guard`` set.
 
     Examples
     --------
@@ -45,6 +52,7 @@ def render_gbuffer(scene, camera) -> GBuffer:
     scene = as_scene(scene)
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a vobscure Camera, got {type(camera).__name__}")
+    inner_camera, camera, guard = _widen(camera, guard)
     H, W = camera.height, camera.width
     depth = np.full(H * W, np.inf)
     normal = np.zeros((H * W, 3))
@@ -77,7 +85,16 @@ def render_gbuffer(scene, camera) -> GBuffer:
                 ("index", "world_position", "world_normal", "world_geometric_normal")}
 
     return GBuffer(camera, depth=depth.reshape(H, W), normal=normal.reshape(H, W, 3),
-                   valid=valid.reshape(H, W), primitive=primitive.reshape(H, W), hits=hits)
+                   valid=valid.reshape(H, W), primitive=primitive.reshape(H, W), hits=hits,
+                   guard=guard, inner_camera=inner_camera if guard else None)
+
+
+def _widen(camera, guard):
+    """(the inner camera, the camera to trace, guard): the frame widened by ``guard`` pixels."""
+    from ._validate import check_int
+
+    guard = check_int(guard, "guard", minimum=0)
+    return camera, camera.widened(guard), guard
 
 
 def _trace_block(scene, camera, origins, dirs) -> dict:

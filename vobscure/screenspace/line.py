@@ -126,6 +126,7 @@ def line_integral(lo, hi, occ_lo, occ_hi, z_s, falloff="constant"):
     return total - occupied, total
 
 
+@C.inner_frame
 def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "nearest",
             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
