@@ -308,3 +308,27 @@ def test_a_view_of_one_flat_wall_is_warned_about_in_the_verdict():
     good = vo.experiments.compare.compare("cornell_box", size=(24, 24), methods="line:5", quick=True, cache=False,
                                           write=False, radii=0.3)
     assert good.summary["view_warnings"] == [] and good.provenance["view"]["chosen_by"] == "the scene's own view"
+
+
+def test_thin_feature_band_is_reported_beside_the_whole_frame(tmp_path):
+    res = C.compare("cornell_box", size=(32, 32), methods="line:5", references=("screen", "volumetric"),
+                    quick=True, cache=False, out=tmp_path, plots=False, suggest=False, repeats=1)
+    (row,) = res.rows
+    radius = row["radius"]
+    gb = vo.render_gbuffer(vo.scenes.cornell_box(), vo.scenes.cornell_box().camera((32, 32)))
+    band = vo.metrics.thin_feature_mask(gb, radius=radius)
+    assert 0 < band.sum() < 0.5 * gb.valid.sum()
+    # the band's error, by hand from the images compare kept
+    est, ref = res.images[(radius, "line:5")], res.references[radius]["volumetric"]
+    use = band & np.isfinite(est) & np.isfinite(ref)
+    d = est[use] - ref[use]
+    assert row["thin_pixels"] == use.sum()
+    assert row["own_thin_rmse"] == pytest.approx(np.sqrt(np.mean(d * d)), rel=1e-12)
+    assert row["own_thin_bias"] == pytest.approx(np.mean(d), rel=1e-12)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["thin_band"] == [dict(radius=radius, pixels=int(band.sum()),
+                                         fraction=pytest.approx(band.sum() / gb.valid.sum()))]
+    (sentence,) = [t for t in summary["text"] if t.startswith("Thin-feature band")]
+    assert f"{row['own_thin_rmse']:.4f}" in sentence and f"{row['own_rmse']:.4f}" in sentence
+    csv_row, = _rows(tmp_path / "results.csv")
+    assert float(csv_row["own_thin_rmse"]) == pytest.approx(row["own_thin_rmse"], rel=1e-12)

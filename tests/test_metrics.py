@@ -289,3 +289,87 @@ def test_equal_error_rays_is_monotone_on_a_curve_that_rises_once():
     assert np.all(np.diff(counts) <= 1e-9 * np.maximum(counts[:-1], 1.0))
     # between 8 and 16 rays the running minimum is flat at 0.1: 0.1 is reached at 8 rays
     assert equal_error_rays(rays, rmse, 0.1)[0] == pytest.approx(8.0, rel=1e-12)
+
+
+# ------------------------------------------------------------------ the thin-feature band
+def _step(width=16, height=6, edge=5, near=2.0, far=5.0):
+    """A vertical step edge: columns < edge at depth ``near``, the rest at ``far``."""
+    depth = np.full((height, width), far)
+    depth[:, :edge] = near
+    return depth
+
+
+@pytest.mark.parametrize("width", [1, 2, 3, 5])
+def test_thin_band_lies_behind_a_step_edge_with_the_width_asked(width):
+    band = vo.metrics.thin_feature_mask(_step(), width=width)
+    expect = np.zeros(band.shape, dtype=bool)
+    expect[:, 5:5 + width] = True           # the far side, `width` columns from the silhouette
+    np.testing.assert_array_equal(band, expect)
+
+
+def test_thin_band_follows_the_far_side_whichever_way_the_edge_faces():
+    depth = _step()[:, ::-1]                # the near object on the right
+    band = vo.metrics.thin_feature_mask(depth, width=2)
+    assert band.sum() == 2 * depth.shape[0] and np.all(band[:, -7:-5]) and not band[:, -5:].any()
+
+
+def test_thin_band_ignores_small_jumps_and_background():
+    depth = _step(near=4.8)                 # a 4 % jump: below THIN_JUMP
+    assert not vo.metrics.thin_feature_mask(depth, width=3).any()
+    assert vo.metrics.thin_feature_mask(depth, width=3, jump=0.03).sum() == 3 * depth.shape[0]
+    sky = _step(far=np.inf)                 # an object against the background: no surface behind it
+    assert not vo.metrics.thin_feature_mask(sky, width=3).any()
+
+
+def test_thin_band_is_empty_on_a_rendered_plane(slab):
+    cam = vo.Camera.look_at((0.3, 2.5, 2.0), (0.0, 0.0, -0.2), size=(64, 48), fov_y=50.0)
+    gb = vo.render_gbuffer(slab, cam)
+    assert gb.valid.mean() > 0.5
+    assert not vo.metrics.thin_feature_mask(gb, radius=0.5).any()
+
+
+def test_thin_band_width_from_the_projected_radius():
+    # orthographic: every pixel's projected radius is R * fy = 0.25 * (6 / 0.5) = 3 pixels
+    cam = vo.Camera.look_at((0, 0, 10), (0, 0, 0), size=(16, 6), ortho_height=0.5)
+    gb = vo.GBuffer.from_arrays(_step(), camera=cam)
+    band = vo.metrics.thin_feature_mask(gb, radius=0.25)
+    np.testing.assert_array_equal(band, vo.metrics.thin_feature_mask(_step(), width=3))
+    # perspective: the far pixels' own projected radius, ceil(R fy / z_far)
+    cam = vo.Camera.look_at((0, 0, 10), (0, 0, 0), size=(16, 6), fov_y=60.0)
+    gb = vo.GBuffer.from_arrays(_step(), camera=cam)
+    w = int(np.ceil(2.0 * cam.fy / 5.0))
+    assert w == 3
+    np.testing.assert_array_equal(vo.metrics.thin_feature_mask(gb, radius=2.0),
+                                  vo.metrics.thin_feature_mask(_step(), width=w))
+
+
+def test_error_restricted_to_the_thin_band():
+    rng = np.random.default_rng(3)
+    depth = _step()
+    band = vo.metrics.thin_feature_mask(depth, width=2)
+    ref = rng.random(depth.shape)
+    est = ref + rng.normal(0.0, 0.1, depth.shape)
+    r = vo.error(est, ref, mask=band)
+    d = est[:, 5:7] - ref[:, 5:7]           # the band, indexed by hand
+    assert r.pixels == d.size and r.ignored == depth.size - d.size
+    assert r.rmse == pytest.approx(np.sqrt(np.mean(d ** 2)), rel=1e-12)
+    assert r.bias == pytest.approx(np.mean(d), rel=1e-12)
+
+
+def test_thin_band_of_a_guarded_gbuffer_is_of_the_inner_frame():
+    scene = vo.scenes.cornell_box()
+    cam = scene.camera((32, 24))
+    guarded = vo.render_gbuffer(scene, cam, guard=4)
+    band = vo.metrics.thin_feature_mask(guarded, radius=0.2)
+    assert band.shape == (24, 32)
+    # the inner frame's own band can only miss silhouettes that lie in the guard band
+    inner = vo.metrics.thin_feature_mask(guarded.inner(), radius=0.2)
+    assert band.any() and np.all(band[inner])
+
+
+@pytest.mark.parametrize("kwargs, match", [(dict(width=0), "width"), (dict(jump=0.0), "jump"),
+                                           (dict(jump=np.nan), "jump"), (dict(radius=0.1), "radius"),
+                                           (dict(radius=0.1, width=2), "not both")])
+def test_thin_band_bad_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        vo.metrics.thin_feature_mask(_step(), **kwargs)

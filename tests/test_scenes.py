@@ -36,8 +36,9 @@ FLOAT32_RTOL = 1e-6
 ALL_BUILDERS = ["blob", "cornell_box", "crease", "groove", "slab", "sphere_on_plane", "steps"]
 #: The registered vegetation scenes (open foliage; tested in test_vegetation.py).
 VEGETATION = ["grass", "leaf_cloud", "leaf_cloud_dense", "tree", "tree_poplar"]
-#: The registered interior (open banners, alpha-tested leaves; tested in test_atrium.py).
-INTERIORS = ["atrium"]
+#: The registered interiors: the atrium (open banners, alpha-tested leaves; tested in
+#: test_atrium.py) and the thin occluders (closed; tested in test_thin_scene.py).
+INTERIORS = ["atrium", "thin_occluders"]
 MESH_DIR = Path(__file__).resolve().parents[2] / "shared/data/meshes"
 
 

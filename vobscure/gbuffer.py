@@ -85,6 +85,13 @@ class GBuffer:
         The solid intervals along the pixels' rays (:class:`vobscure.layers.SolidIntervals`,
         of the image's shape), for the estimators' ``thickness="layers"``; None: only the
         first surface is known.
+    guard : int, optional
+        Width in pixels of the guard band around the image (0: none): the buffers cover the
+        inner frame widened by ``guard`` pixels on each side (what
+        ``render_gbuffer(..., guard=P)`` renders), so that taps near the inner frame's
+        edge read real depth. The estimators and the ground truth return the inner frame.
+    inner_camera : Camera, optional
+        With ``guard`` > 0: the camera of the inner frame (``camera`` is the widened one).
 
     Attributes
     ----------
@@ -112,10 +119,12 @@ class GBuffer:
         pixels); None for a rendered one.
     intervals : SolidIntervals or None
         The solid intervals, when known (see :meth:`with_intervals`).
+    guard : int
+        The guard band's width in pixels, 0 when there is none (see :meth:`inner`).
     """
 
     def __init__(self, camera, *, depth, normal, valid, primitive, hits, dtype=np.float64,
-                 view_to_world=None, conversion=None, intervals=None):
+                 view_to_world=None, conversion=None, intervals=None, guard=0, inner_camera=None):
         if normal is None:
             raise ValueError("a GBuffer needs normals (normal_clamp and the ground truth read them); "
                              "GBuffer.from_arrays(depth, camera=...) derives them from the depth")
@@ -129,6 +138,7 @@ class GBuffer:
         self._view_to_world = view_to_world
         self.conversion = conversion
         self.intervals = None if intervals is None else self._checked_intervals(intervals)
+        self.guard, self._inner_camera = _checked_guard(guard, inner_camera, self.depth.shape)
 
     def _checked_intervals(self, intervals):
         from .layers import SolidIntervals
@@ -156,7 +166,8 @@ class GBuffer:
         """
         return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
                        primitive=self.primitive, hits=self._hit_source, dtype=self.dtype,
-                       view_to_world=self._view_to_world, conversion=self.conversion, intervals=intervals)
+                       view_to_world=self._view_to_world, conversion=self.conversion, intervals=intervals,
+                       guard=self.guard, inner_camera=self._inner_camera)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -450,11 +461,72 @@ class GBuffer:
         return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
                        primitive=self.primitive, hits=hits, dtype=dtype,
                        view_to_world=self._view_to_world, conversion=self.conversion,
-                       intervals=self.intervals)
+                       intervals=self.intervals, guard=self.guard, inner_camera=self._inner_camera)
+
+    def inner(self) -> "GBuffer":
+        """The G-buffer of the inner frame: this one without its guard band (itself when
+        ``guard`` is 0).
+
+        The buffers, the per-hit data and the solid intervals are cropped by ``guard`` pixels
+        on each side; the camera is the inner frame's (the one given to
+        :func:`~vobscure.render_gbuffer`). The inner pixels are the same rays as an
+        unguarded render of that camera (``tests/test_guard.py``).
+
+        Examples
+        --------
+        >>> import vobscure as vo
+        >>> cam = vo.Camera.look_at((0, 2, 1), (0, 0, 0), size=(8, 6))
+        >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam, guard=3)
+        >>> gb.shape, gb.guard, gb.inner().shape, gb.inner().camera == cam
+        ((12, 14), 3, (6, 8), True)
+        """
+        g = self.guard
+        if g == 0:
+            return self
+        H, W = self.shape
+        rows, cols = slice(g, H - g), slice(g, W - g)
+        width = W - 2 * g
+        hits = None
+        if self._hit_source is not None:
+            def hits():
+                full = self.hits
+                i, j = np.divmod(full["index"], W)
+                keep = (i >= g) & (i < H - g) & (j >= g) & (j < W - g)
+                out = {k: np.asarray(v)[keep] for k, v in full.items()}
+                out["index"] = (i[keep] - g) * width + (j[keep] - g)
+                return out
+        intervals = self.intervals
+        if intervals is not None:
+            from .layers import SolidIntervals
+
+            layers = None if intervals.layers is None else intervals.layers.crop(rows, cols)
+            intervals = SolidIntervals(intervals.front[:, rows, cols], intervals.back[:, rows, cols],
+                                       dtype=intervals.dtype, layers=layers)
+        return GBuffer(self._inner_camera, depth=self.depth[rows, cols], normal=self.normal[rows, cols],
+                       valid=self.valid[rows, cols], primitive=self.primitive[rows, cols], hits=hits,
+                       dtype=self.dtype, view_to_world=self._view_to_world, conversion=self.conversion,
+                       intervals=intervals)
 
     def __repr__(self) -> str:
         H, W = self.shape
-        return f"GBuffer({W}x{H}, {int(self.valid.sum())} covered pixels, {self.dtype})"
+        guard = f", guard {self.guard}" if self.guard else ""
+        return f"GBuffer({W}x{H}, {int(self.valid.sum())} covered pixels, {self.dtype}{guard})"
+
+
+def _checked_guard(guard, inner_camera, shape) -> tuple[int, object]:
+    """(guard, inner_camera) validated against the image ``shape``."""
+    if isinstance(guard, bool) or not isinstance(guard, (int, np.integer)) or guard < 0:
+        raise ValueError(f"guard must be an int >= 0 (pixels), got {guard!r}")
+    guard = int(guard)
+    if guard == 0:
+        return 0, None
+    if inner_camera is None:
+        raise ValueError("a GBuffer with guard > 0 needs inner_camera, the inner frame's camera")
+    H, W = shape
+    if tuple(inner_camera.shape) != (H - 2 * guard, W - 2 * guard):
+        raise ValueError(f"inner_camera.shape must be the image's shape {shape} less 2 * guard = "
+                         f"{2 * guard}, got {inner_camera.shape}")
+    return guard, inner_camera
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

@@ -693,7 +693,8 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     Returns
     -------
     Estimate
-        (H, W) value and stderr, NaN on background pixels.
+        (H, W) value and stderr, NaN on background pixels; of the inner frame
+        (:meth:`GBuffer.inner`) when the G-buffer has a guard band.
 
     Notes
     -----
@@ -717,6 +718,7 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     bounces, albedo = _check_bounces(bounces, albedo)
     if bounces and quantity != "ao":
         raise ValueError(f"bounces > 0 is defined for quantity='ao' only, got quantity={quantity!r}")
+    gbuffer = gbuffer.inner()  # a guard band's pixels are not computed: the inner frame only
     valid = gbuffer.valid
     hits = gbuffer.hits  # per covered pixel, row-major: the order of a boolean mask
     points, normals, geo = hits["world_position"], hits["world_normal"], hits["world_geometric_normal"]

@@ -225,6 +225,13 @@ class PeeledLayers:
         out += 0.0   # no negative zeros
         return out
 
+    def crop(self, rows: slice, cols: slice) -> "PeeledLayers":
+        """The layers of the pixels ``[rows, cols]`` (e.g. a guard band's inner frame)."""
+        opened = self.open_surface[:, rows, cols] if self.open_surface.strides[0] else None
+        return PeeledLayers(self.depth[:, rows, cols], self.primitive[:, rows, cols],
+                            self.entering[:, rows, cols], face_normals=self._face_normals,
+                            rotation=self._rotation, open_surface=opened)
+
     def __repr__(self) -> str:
         H, W = self.shape
         return f"PeeledLayers({self.count} per pixel, {W}x{H})"

@@ -45,6 +45,7 @@ from .estimate import DEFAULT_GROUPS, Estimate
 from .objectspace import bunnell_gbuffer, sphere_set_gbuffer
 from .references import QUANTITIES, Quantity, lookup
 from .screenspace import alchemy, gtao, hbao, point_taps, sao, vo_area, vo_line, vo_point, vo_reference
+from .screenspace import crop_guard, inner_shape
 from .trees.pixels import hegeman_gbuffer, poisson_gbuffer, reeves_blau_gbuffer
 
 __all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
@@ -216,9 +217,9 @@ class Method:
         ...
         ValueError: no registered method takes the option(s) 'thicknes'; method 'line' takes falloff, fetch, noise_size, normal_clamp, offscreen, radius, randomize, samples, seed, thickness
         """
-        out = self._call(gbuffer, samples, fetch, options)
+        out = crop_guard(self._call(gbuffer, samples, fetch, options), gbuffer)
         value = out.value if isinstance(out, Estimate) else out
-        shape = getattr(gbuffer, "shape", None)
+        shape = inner_shape(gbuffer) if hasattr(gbuffer, "shape") else None
         if not isinstance(value, np.ndarray) or (shape is not None and value.shape != tuple(shape)):
             raise ValueError(f"method {self.name!r} must return an (H, W) array of the G-buffer's shape "
                              f"{shape}, got {type(value).__name__} {getattr(value, 'shape', '')}")
@@ -227,7 +228,7 @@ class Method:
     def estimate(self, gbuffer, samples: int | None = None, *, fetch: str | None = None, **options) -> Estimate:
         """As :meth:`run`, for a method whose function returns an :class:`~vobscure.Estimate`
         (value and standard error, e.g. ``reference``); an error for the others."""
-        out = self._call(gbuffer, samples, fetch, options)
+        out = crop_guard(self._call(gbuffer, samples, fetch, options), gbuffer)
         if not isinstance(out, Estimate):
             raise ValueError(f"method {self.name!r} gives no standard error (its function returns "
                              f"{type(out).__name__}); use run()")

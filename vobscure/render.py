@@ -23,7 +23,7 @@ __all__ = ["render_gbuffer", "PEEL_RAYS"]
 PEEL_RAYS = 4096
 
 
-def render_gbuffer(scene, camera, *, layers: int = 1) -> GBuffer:
+def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer:
     """Render a G-buffer of ``scene`` seen by ``camera`` (one Embree ray per pixel centre).
 
     Parameters
@@ -41,10 +41,17 @@ def render_gbuffer(scene, camera, *, layers: int = 1) -> GBuffer:
         a solid, open meshes as zero-thickness intervals) with the surfaces in
         ``gb.intervals.layers`` (:class:`vobscure.layers.PeeledLayers`). The first layer is
         the G-buffer of ``layers=1``, bit for bit.
+    guard : int, optional
+        A guard band of this many pixels on each side (default 0, none): the frame of
+        :meth:`camera.widened(guard) <vobscure.Camera.widened>` is rendered (the same focal
+        length, the same rays for the inner pixels), so that the screen-space estimators'
+        taps near the edge read real depth; they and the ground truth return the inner
+        frame (``camera``'s), and :meth:`GBuffer.inner` crops the G-buffer.
 
     Returns
     -------
     GBuffer
+        Of ``camera.widened(guard)``'s shape, with ``guard`` set.
 
     Notes
     -----
@@ -88,6 +95,7 @@ def render_gbuffer(scene, camera, *, layers: int = 1) -> GBuffer:
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a vobscure Camera, got {type(camera).__name__}")
     K = check_int(layers, "layers")
+    inner_camera, camera, guard = _widen(camera, guard)
     H, W = camera.height, camera.width
     depth = np.full(H * W, np.inf)
     normal = np.zeros((H * W, 3))
@@ -126,7 +134,16 @@ def render_gbuffer(scene, camera, *, layers: int = 1) -> GBuffer:
 
     return GBuffer(camera, depth=depth.reshape(H, W), normal=normal.reshape(H, W, 3),
                    valid=valid.reshape(H, W), primitive=primitive.reshape(H, W), hits=hits,
-                   intervals=None if peel is None else peel.intervals(H, W))
+                   intervals=None if peel is None else peel.intervals(H, W),
+                   guard=guard, inner_camera=inner_camera if guard else None)
+
+
+def _widen(camera, guard):
+    """(the inner camera, the camera to trace, guard): the frame widened by ``guard`` pixels."""
+    from ._validate import check_int
+
+    guard = check_int(guard, "guard", minimum=0)
+    return camera, camera.widened(guard), guard
 
 
 class _Peeling:

@@ -17,7 +17,9 @@ another quantity (a VO estimator against ray-cast AO) are reported as model erro
 the method's accuracy. :func:`verdict` turns the rows into the answer: per reference the
 Pareto front in time and in taps, the cheapest configuration that meets a target RMSE or the
 best that fits a time budget, which error term dominates and what measurably reduces it (for
-the screen-space term, the thickness model is tried at a few thicknesses).
+the screen-space term, the thickness model is tried at a few thicknesses), and the error in the
+thin-feature band (:func:`vobscure.metrics.thin_feature_mask`: just behind silhouettes, where
+halos live) beside the whole frame's.
 
 Outputs (all written atomically into ``out``): ``results.csv``, ``results.md`` (verdict, then
 the table), ``summary.json`` (the verdict as data), ``tradeoff.png`` (error against time, taps
@@ -349,7 +351,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         ``rows`` hold per configuration ``method, samples, label, radius, normal_clamp,
         thickness, seconds, taps_per_pixel, texels_per_pixel, quantity``,
         ``<reference>_<metric>`` for every reference and metric of :data:`METRICS`,
-        ``own_reference, own_rmse, own_bias`` (the reference of the method's own quantity)
+        ``own_reference, own_rmse, own_bias`` (the reference of the method's own quantity),
+        ``own_thin_rmse, own_thin_bias, thin_pixels`` (the same in the thin-feature band,
+        :func:`vobscure.metrics.thin_feature_mask` at the row's radius)
         and, with the screen and volumetric references, the decomposition
         ``<term>_error_rmse`` / ``_bias``.
 
@@ -461,6 +465,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         all_refs.setdefault(res.radius, {k: v.value for k, v in res.references.items()})
         hits.setdefault(res.radius, res.cache_hits)
     gb = results[0].gbuffer
+    thin_band = _thin_band(rows, images, all_refs, gb)
     stages.add_sweep(results)
     if orbit > 1:
         t0 = time.perf_counter()
@@ -475,6 +480,8 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     if thickness_trials:
         stages.add("thickness trials", time.perf_counter() - t0, "computed")
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
+    summary["thin_band"] = thin_band
+    summary["text"] += [_thin_sentence(band, rows) for band in thin_band if band["pixels"]]
     if missing:
         summary["text"].insert(0, missing_note(missing, sc, thickness))
     summary["missing_references"] = {k: dict(stand_in=v, open_meshes=list(sc.open_meshes)) for k, v in missing.items()}
@@ -557,6 +564,40 @@ def _thickness_trials(rows, images, refs, gb, *, normal_clamp, seed, repeats) ->
                            volumetric_rmse=rep.rmse, volumetric_bias=rep.bias, seconds=timings["run"].median,
                            baseline_rmse=best["volumetric_rmse"]))
     return trials
+
+
+def _thin_band(rows, images, all_refs, gb) -> list:
+    """Add ``own_thin_rmse``, ``own_thin_bias`` (against the row's own reference, in the
+    thin-feature band of :func:`vobscure.metrics.thin_feature_mask` at the row's radius) and
+    ``thin_pixels`` to every row; per radius the band's size."""
+    from ..metrics import error, thin_feature_mask
+
+    bands = []
+    for radius, refs in all_refs.items():
+        mask = thin_feature_mask(gb, radius=radius)
+        covered = int(np.count_nonzero(gb.inner().valid))
+        bands.append(dict(radius=radius, pixels=int(mask.sum()), fraction=float(mask.sum() / max(covered, 1))))
+        for row in (r for r in rows if r["radius"] == radius):
+            rep = error(images[(radius, row["label"])], refs[row["own_reference"]], mask=mask) \
+                if row["own_reference"] in refs else None
+            row["own_thin_rmse"] = rep.rmse if rep else float("nan")
+            row["own_thin_bias"] = rep.bias if rep else float("nan")
+            row["thin_pixels"] = rep.pixels if rep else 0
+    return bands
+
+
+def _thin_sentence(band, rows) -> str:
+    """The verdict's sentence on the thin-feature band at one radius: per reference, the most
+    accurate configuration there against the whole frame's error."""
+    sel = [r for r in rows if r["radius"] == band["radius"] and np.isfinite(r.get("own_thin_rmse", np.nan))
+           and not r.get("reference_only", False)]
+    parts = [f"against {ref!r} {b['label']}, RMSE {b['own_thin_rmse']:.4f} (bias {b['own_thin_bias']:+.4f}) "
+             f"against {b['own_rmse']:.4f} over the whole frame"
+             for ref in dict.fromkeys(r["own_reference"] for r in sel)
+             for b in [min((r for r in sel if r["own_reference"] == ref), key=lambda r: r["own_thin_rmse"])]]
+    return (f"Thin-feature band at R = {band['radius']:.4g} (the far side of depth edges, where halos live: "
+            f"{band['pixels']} pixels, {band['fraction']:.1%} of the covered ones): "
+            + ("; ".join(parts) + "." if parts else "no configuration is scored there."))
 
 
 # --------------------------------------------------------------------------- the verdict
@@ -706,7 +747,7 @@ def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> d
 def _markdown(rows, summary, provenance) -> str:
     w, h = provenance["camera"]["size"]
     cols = ["label", "quantity", "radius", "seconds", "taps_per_pixel", "texels_per_pixel", "own_reference",
-            "own_rmse", "own_bias"]
+            "own_rmse", "own_bias", "own_thin_rmse"]
     refs = provenance["references"]
     cols += [f"{ref}_{m}" for ref in refs for m in METRICS]
     cols += [c for c in ("sampling_error_rmse", "screen_error_rmse", "model_error_rmse", "total_error_rmse",
@@ -822,6 +863,11 @@ def _gallery(path, rows, refs, images, gb):
     for k, (name, img) in enumerate(ref_imgs.items()):
         axes[0, k].imshow(np.ma.masked_where(bg, img), cmap="gray", vmin=0, vmax=1)
         axes[0, k].set_title(f"reference: {name}", fontsize=8)
+    if len(ref_imgs) < ncol:      # the thin-feature band the verdict scores separately
+        from ..metrics import thin_feature_mask
+
+        axes[0, len(ref_imgs)].imshow(np.where(bg, 0.5, thin_feature_mask(gb, radius=radius)), cmap="gray_r", vmin=0, vmax=1)
+        axes[0, len(ref_imgs)].set_title("thin-feature band", fontsize=8)
     for n, row in enumerate(configs):
         r, c = 1 + n // per_row, 2 * (n % per_row)
         label = row["label"]

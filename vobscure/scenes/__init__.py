@@ -1,11 +1,13 @@
 """Scenes: named triangle meshes, procedural builders, file loading, and the one resolver
 (:func:`as_scene`, :func:`resolve`) of a scene argument; vegetation scenes (leaf clouds, trees,
 grass) with open, two-sided foliage in :mod:`vobscure.scenes.vegetation`; an interior with
-alpha-tested foliage, :func:`atrium`, in :mod:`vobscure.scenes.atrium`."""
+alpha-tested foliage, :func:`atrium`, in :mod:`vobscure.scenes.atrium`; thin occluders (a
+table, a chair, a railing, a hanging sheet), :func:`thin_occluders`, in :mod:`vobscure.scenes.thin`."""
 
 from . import _alpha, _resolve, _scene, procedural, vegetation
 from ._alpha import AlphaMask
 from .atrium import atrium
+from .thin import thin_occluders
 from ._resolve import as_scene, check_spec, resolve
 from ._scene import Scene
 from .io import AlphaWarning, DegenerateFacesWarning, load
@@ -23,4 +25,5 @@ __all__ = [
     *procedural.__all__,
     *vegetation.__all__,
     "atrium",
+    "thin_occluders",
 ]

@@ -23,6 +23,7 @@ import trimesh
 from .._validate import as_rng, check_int, check_positive
 from ._scene import Scene
 from .atrium import atrium
+from .thin import thin_occluders
 from .vegetation import grass, leaf_cloud, leaf_cloud_dense, tree, tree_poplar
 
 __all__ = [
@@ -586,6 +587,8 @@ _BUILDERS = {
     "tree_poplar": tree_poplar,
     # the interior (open banners and alpha-tested leaf cards; vobscure.scenes.atrium)
     "atrium": atrium,
+    # thin occluders on a floor before a wall, all closed (vobscure.scenes.thin)
+    "thin_occluders": thin_occluders,
 }
 
 
@@ -600,7 +603,7 @@ def names() -> list[str]:
     >>> from vobscure.scenes import names
     >>> names()  # doctest: +NORMALIZE_WHITESPACE
     ['atrium', 'blob', 'cornell_box', 'crease', 'grass', 'groove', 'leaf_cloud', 'leaf_cloud_dense',
-     'slab', 'sphere_on_plane', 'steps', 'tree', 'tree_poplar']
+     'slab', 'sphere_on_plane', 'steps', 'thin_occluders', 'tree', 'tree_poplar']
     """
     return sorted(_BUILDERS)
 

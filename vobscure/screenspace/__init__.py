@@ -2,6 +2,7 @@
 baselines engines ship instead: GTAO (Jimenez et al. 2016), HBAO (Bavoil et al. 2008),
 Alchemy AO (McGuire et al. 2011) and SAO (McGuire et al. 2012)."""
 
+from ._common import crop_guard, inner_shape  # the guard band's crop, for vobscure.methods
 from .area import vo_area
 from .blur import bilateral_blur, combine_radii
 from .gtao import PRESETS as GTAO_PRESETS

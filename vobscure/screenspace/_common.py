@@ -13,6 +13,8 @@
 - :func:`solid_intervals` / :func:`nearest_pixel` / :func:`inside_intervals` /
   :func:`interval_back`: ``thickness="layers"``, the G-buffer's solid intervals read at the
   pixel a sample or tap falls in.
+- :func:`inner_frame` / :func:`crop_guard`: the guard band (``render_gbuffer(..., guard=P)``):
+  the estimators evaluate the inner frame's pixels only (:func:`frame`) and return it.
 
 Used by the modules of :mod:`vobscure.screenspace` only (tests and benchmarks also reach in);
 the estimators' public arguments are documented on the estimators.
@@ -30,6 +32,8 @@ when a sample lands on them.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 
@@ -37,6 +41,7 @@ import numpy as np
 
 from .._validate import as_rng, check_choice, check_int, check_positive
 from ..camera.kernel import ray_to_xy, ray_xy
+from ..estimate import Estimate
 from ..gbuffer import GBuffer
 from ..patterns import SamplePattern, ball, disk
 
@@ -130,14 +135,64 @@ CHUNK_PIXELS = 16384
 
 
 def frame(gbuffer, radius):
-    """Validate; the float64 depth buffer (NaN -> +inf), flat, and the valid pixels' indices."""
+    """Validate; the float64 depth buffer (NaN -> +inf), flat, and the valid pixels' indices
+    (of the inner frame only when the G-buffer has a guard band: its pixels are read, not
+    evaluated)."""
     gb = as_gbuffer(gbuffer)
     check_positive(radius, "radius")
     flat = np.asarray(gb.depth, dtype=np.float64).reshape(-1)
     nan = np.isnan(flat)
     depth64 = np.where(nan, np.inf, flat) if nan.any() else np.ascontiguousarray(flat)
     index = np.flatnonzero(np.isfinite(depth64) & (depth64 > 0))
+    g = gb.guard
+    if g:
+        H, W = gb.shape
+        i, j = np.divmod(index, W)
+        index = index[(i >= g) & (i < H - g) & (j >= g) & (j < W - g)]
     return gb, depth64, index
+
+
+def inner_shape(gbuffer) -> tuple[int, int]:
+    """(H, W) of the frame the estimators return: the image less its guard band."""
+    H, W = gbuffer.shape
+    g = getattr(gbuffer, "guard", 0)
+    return H - 2 * g, W - 2 * g
+
+
+def crop_guard(result, gbuffer):
+    """``result`` (an array whose first two axes are the G-buffer's image, or an
+    :class:`~vobscure.Estimate` of such arrays) cropped to the inner frame of ``gbuffer``'s
+    guard band; ``result`` itself when there is no guard band or when it is already of the
+    inner frame's shape."""
+    g = getattr(gbuffer, "guard", 0)
+    if not g:
+        return result
+    H, W = gbuffer.shape
+
+    def crop(a):
+        a = np.asarray(a)
+        if a.shape[:2] == inner_shape(gbuffer):
+            return a
+        if a.shape[:2] != (H, W):
+            raise ValueError(f"result has shape {a.shape}, neither the guarded image's {(H, W)} "
+                             f"nor its inner frame's {inner_shape(gbuffer)}")
+        return np.ascontiguousarray(a[g:H - g, g:W - g])
+
+    if isinstance(result, Estimate):
+        bent = None if result.bent_normal is None else crop(result.bent_normal)
+        return dataclasses.replace(result, value=crop(result.value), stderr=crop(result.stderr),
+                                   bent_normal=bent)
+    return crop(result)
+
+
+def inner_frame(estimator):
+    """Decorator of a public estimator ``estimator(gbuffer, ...)``: its result cropped to the
+    inner frame when ``gbuffer`` has a guard band (:func:`crop_guard`), unchanged otherwise."""
+    @functools.wraps(estimator)
+    def wrapper(gbuffer, *args, **kwargs):
+        return crop_guard(estimator(gbuffer, *args, **kwargs), gbuffer)
+
+    return wrapper
 
 
 def prepare(gbuffer, radius, *, index=None, depth64=None) -> Pixels:

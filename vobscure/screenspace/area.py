@@ -299,6 +299,7 @@ def region_areas(pattern: SamplePattern) -> np.ndarray:
 
 # --- the estimator -------------------------------------------------------------------------
 
+@C.inner_frame
 def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", model: str = "box", fetch: str = "bspline",
             prefilter: bool = False, lod_bias=None, randomize: bool = True, seed=0,

@@ -44,6 +44,7 @@ def _inner_integral(h, gamma, sin_g, cos_g):
     return 0.25 * (cos_g + 2.0 * h * sin_g - np.cos(2.0 * h - gamma))
 
 
+@C.inner_frame
 def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_range: float = 0.0,
          thin_occluder: float = 0.0, thickness=None, power: float = 1.0, normal_fudge: float = 0.0,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
@@ -220,6 +221,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
+@C.inner_frame
 def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3,
                       falloff_range: float = 0.0, thin_occluder: float = 0.0, thickness=None,
                       normal_fudge: float = 0.0,

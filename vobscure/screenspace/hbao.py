@@ -24,6 +24,7 @@ def hbao_taps(directions: int, steps: int) -> int:
     return check_int(directions, "directions") * check_int(steps, "steps")
 
 
+@C.inner_frame
 def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_bias: float = np.pi / 18,
          attenuation: bool = True, randomize: bool = True, seed=0, offscreen: str = "clamp",
          noise_size: int = C.NOISE_SIZE) -> np.ndarray:

@@ -142,6 +142,7 @@ def _intervals_line_integral(lo, hi, occupied, z_s, falloff):
     return total - occ, total
 
 
+@C.inner_frame
 def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "nearest",
             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:

@@ -175,6 +175,7 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
     return np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
 
 
+@C.inner_frame
 def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, thickness=None,
              falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "bilinear",
              offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
@@ -316,6 +317,7 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
                      intervals=intervals)
 
 
+@C.inner_frame
 def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = False,
                  thickness=None, falloff: str = "constant", seed=0, fetch: str = "bilinear",
                  offscreen: str = "clamp", groups: int = DEFAULT_GROUPS,

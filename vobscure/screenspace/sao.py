@@ -159,6 +159,7 @@ def _dot_products(px: C.Pixels):
     return dots, vv, vn
 
 
+@C.inner_frame
 def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, sigma: float = 1.0,
             k: float = 1.0, epsilon: float = 1e-4, randomize: bool = True, seed=0,
             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
@@ -274,6 +275,7 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     return _disk_sums(gb, radius, u0, w0, texture, offscreen, summand, finish)
 
 
+@C.inner_frame
 def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: float = 0.01,
         sigma: float = 1.0, k: float = 1.0, epsilon: float = 0.01, randomize: bool = True, seed=0,
         offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
