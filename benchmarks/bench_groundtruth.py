@@ -335,44 +335,62 @@ def bench_ground_truth(scene, size, repeats, threads, report: Report):
                 GOAL_GROUND_TRUTH_SECONDS, at_least=False, unit=" s")
 
 
-def bench_screen_reference(quick: bool, threads, report: Report):
-    """Benchmark 4: the converged screen-space reference against the 256-ray AO, one run each."""
-    import time
+def _screen_reference_views(quick: bool):
+    """(label, scene, camera, radius) of benchmark 4: the Cornell box from inside with the
+    library's default radius, and the atrium's default view with ``compare``'s radius rule."""
+    from vobscure.experiments.compare import choose_radius
 
-    scene = vo.scenes.cornell_box()
     size = INSIDE_SIZES[bool(quick)]
+    box = vo.scenes.cornell_box()
     view = dict(INSIDE_VIEW)
     cam = vo.Camera.look_at(view.pop("eye"), view.pop("target"), size=size, **view)
-    gb = vo.render_gbuffer(scene, cam)
-    radius = default_radius(scene)
-    pixels = int(gb.valid.sum())
-    report.header(f"4. Screen-space reference vs ray-cast AO: {scene.name} from inside, {size[0]}x{size[1]}, "
-                  f"{pixels} covered pixels, radius {radius:.4g}, one run each")
-    start = time.perf_counter()
-    ref = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)
-    screen_s = time.perf_counter() - start
-    start = time.perf_counter()
-    points = _reference(gb, radius=radius, samples=POINT_SAMPLES, seed=SEED, along="point", normal_clamp=False,
-                        thickness=None, falloff="constant", fetch="bilinear", offscreen="clamp",
-                        groups=DEFAULT_GROUPS, progress=False)
-    points_s = time.perf_counter() - start
-    start = time.perf_counter()
-    ao = vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED, threads=threads)
-    ao_s = time.perf_counter() - start
-    valid = gb.valid
-    report.row(f"vo_reference(samples={SCREEN_SAMPLES})", screen_s, None, screen_s / ao_s,
-               f"mean stderr {float(np.mean(ref.stderr[valid])):.5f}")
-    report.row(f"point-sampled reference ({POINT_SAMPLES} points)", points_s, None, points_s / ao_s,
-               f"mean stderr {float(np.mean(points.stderr[valid])):.5f}")
-    report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None,
-               f"mean stderr {float(np.mean(ao.stderr[valid])):.5f}")
-    report.goal(f"[{scene.name} inside {size[0]}x{size[1]}] vo_reference / ground_truth ao (time)",
-                screen_s / ao_s, GOAL_SCREEN_OVER_AO, at_least=False)
+    yield "cornell_box inside", box, cam, default_radius(box)
+    atrium = vo.scenes.atrium()
+    cam = atrium.camera(size=size)
+    yield "atrium", atrium, cam, choose_radius(atrium, vo.render_gbuffer(atrium, cam)).radius
+
+
+def bench_screen_reference(quick: bool, threads, report: Report):
+    """Benchmark 4: the converged screen-space reference against the 256-ray AO, one run each,
+    with 2048 stratified points of the ball as the standard error to match."""
+    import time
+
+    for label, scene, cam, radius in _screen_reference_views(quick):
+        gb = vo.render_gbuffer(scene, cam)
+        size = cam.size
+        pixels = int(gb.valid.sum())
+        report.header(f"4. Screen-space reference vs ray-cast AO: {label}, {size[0]}x{size[1]}, "
+                      f"{pixels} covered pixels, radius {radius:.4g}, one run each")
+        start = time.perf_counter()
+        ref = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)
+        screen_s = time.perf_counter() - start
+        start = time.perf_counter()
+        ao = vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED, threads=threads)
+        ao_s = time.perf_counter() - start
+        start = time.perf_counter()
+        points = _reference(gb, radius=radius, samples=POINT_SAMPLES, seed=SEED, along="point", normal_clamp=False,
+                            thickness=None, falloff="constant", fetch="bilinear", offscreen="clamp",
+                            groups=DEFAULT_GROUPS, progress=False)
+        points_s = time.perf_counter() - start
+        valid = gb.valid
+
+        def stderr(e):
+            se = e.stderr[valid].astype(np.float64)
+            return (f"stderr mean {se.mean():.5f} rms {np.sqrt(np.mean(se ** 2)):.5f} "
+                    f"p95 {np.percentile(se, 95):.5f}")
+        report.row(f"vo_reference(samples={SCREEN_SAMPLES})", screen_s, None, screen_s / ao_s, stderr(ref))
+        report.row(f"point-sampled reference ({POINT_SAMPLES} points)", points_s, None, points_s / ao_s,
+                   stderr(points))
+        report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None, stderr(ao))
+        report.goal(f"[{label} {size[0]}x{size[1]}] vo_reference / ground_truth ao (time)",
+                    screen_s / ao_s, GOAL_SCREEN_OVER_AO, at_least=False)
 
 
 # --------------------------------------------------------------------------- main
 def parse_args(argv):
     parser = _bench.parser(__doc__, quick="small sizes (< 30 s), for smoke tests", statistic="best")
+    parser.add_argument("--screen-only", action="store_true",
+                        help="only benchmark 4 (the converged screen-space reference against the AO)")
     parser.add_argument("--threads", type=int, default=None,
                         help="vobscure worker threads (default: the library's, every usable core)")
     args = _bench.parse(parser, argv)
@@ -388,6 +406,9 @@ def main(argv=None) -> int:
     def body(report):
         machine_facts(args.threads)
         print(f"  mode: {'quick' if args.quick else 'full'}   repeats: best of {args.repeats}")
+        if args.screen_only:
+            bench_screen_reference(args.quick, args.threads, report)
+            return
         scenes = load_scenes()
         for scene in scenes:
             scene.tracer  # build (and commit) the Embree scenes outside the timings
