@@ -260,6 +260,44 @@ def sector_weights(gamma: np.ndarray, sectors: int, weighting: str) -> np.ndarra
     return np.diff(F, axis=1)
 
 
+def _antiderivative_basis(sectors: int, weighting: str):
+    """The sector boundaries phi_j = theta_j - gamma (S + 1,) and the constant vectors (P, Q)
+    with which the antiderivative of the weighting at theta_j = gamma + phi_j reads
+    sign(theta_j) (cos gamma P_j + sin gamma Q_j + R(gamma)) (see :func:`sector_weights`):
+
+    cosine: a(theta) = cos gamma (1 - cos 2 phi) / 4 + sin gamma (sin 2 phi / 4 + phi / 2)
+    + gamma sin gamma / 2 (GTAO's inner integral expanded, Jimenez et al. 2016, Sec. 4);
+    uniform: (1 - cos theta) / 2 = -cos gamma cos phi / 2 + sin gamma sin phi / 2 + 1 / 2.
+    None for the weightings whose weights do not depend on gamma."""
+    if weighting not in ("cosine", "uniform"):
+        return None
+    phi = -0.5 * np.pi + np.pi * np.arange(sectors + 1) / sectors
+    if weighting == "cosine":
+        return phi, np.stack([0.25 * (1.0 - np.cos(2.0 * phi)), 0.25 * np.sin(2.0 * phi) + 0.5 * phi], axis=1)
+    return phi, np.stack([-0.5 * np.cos(phi), 0.5 * np.sin(phi)], axis=1)
+
+
+def _open_weight(open_, sl, weighting, basis):
+    """(k,) weighted sum of the open sectors (``open_``: (k, S) of 0 and 1) of slice ``sl``.
+
+    With F the antiderivative at the boundaries, sum_i open_i (F_{i+1} - F_i) =
+    sum_j F_j (open_{j-1} - open_j) (open_{-1} = open_S = 0): three matrix-vector products
+    instead of the (k, S) weights."""
+    k, S = open_.shape
+    if basis is None:
+        return open_ @ sector_weights(np.zeros(1), S, weighting)[0]
+    phi, PQ = basis
+    c = np.empty((k, S + 1))
+    c[:, 0] = -open_[:, 0]
+    np.subtract(open_[:, :-1], open_[:, 1:], out=c[:, 1:S])
+    c[:, S] = open_[:, -1]
+    # sign(theta_j): theta_j = gamma + phi_j < 0 flips the antiderivative
+    c[phi[None, :] < -sl.gamma[:, None]] *= -1.0
+    pq = c @ PQ
+    R = 0.5 * sl.gamma * sl.sin_g if weighting == "cosine" else np.full(k, 0.5)
+    return sl.cos_g * pq[:, 0] + sl.sin_g * pq[:, 1] + R * c.sum(axis=1)
+
+
 def _layer_back(px, tap, intervals):
     """The back depth (k,) of the solid interval at the tapped pixel that contains or
     follows the tapped depth (+inf when none: an unseen end)."""
@@ -313,6 +351,7 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
     u_slice, u_step, has_noise = C.slice_noise(px, texture)
     S = sectors
     shifts = np.arange(S, dtype=np.uint64)
+    basis = _antiderivative_basis(S, weighting)
     visibility = np.zeros(k)
     weight_sum = np.zeros(k)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -356,9 +395,8 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
                     i1 = np.where(use, i1, 0.0).astype(np.intp)
                     occluded |= _LOW[i1] ^ _LOW[i0]
             # the unmarked sectors, weighted
-            open_ = ((occluded[:, None] >> shifts) & np.uint64(1)) == 0
-            w = sector_weights(sl.gamma, S, weighting)
-            slice_vis = np.einsum("ks,ks->k", open_.astype(np.float64), w)
+            open_ = (((occluded[:, None] >> shifts) & np.uint64(1)) == 0).astype(np.float64)
+            slice_vis = _open_weight(open_, sl, weighting, basis)
             if weighting in ("cosine", "eevee"):
                 # Jimenez et al. 2016, Sec. 4: the slice weighted by the projected normal's length
                 visibility += sl.pn_len * slice_vis
