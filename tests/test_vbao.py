@@ -290,3 +290,36 @@ def test_registered_against_its_own_references(crease_view):
     np.testing.assert_array_equal(u.run(gb, 2, radius=0.5, seed=3),
                                   vbao(gb, radius=0.5, slices=2, steps=3, seed=3, weighting="uniform"))
     assert vo.vbao is vbao
+
+
+def test_sector_weights_against_quadrature_and_the_byte_tables():
+    """The sector weights against a midpoint quadrature of their integrands, and the byte
+    tables that sum the open sectors of a mask against the explicit sum of those weights."""
+    from types import SimpleNamespace
+
+    from vobscure.screenspace.vbao import _LOW, _Weights
+
+    rng = np.random.default_rng(0)
+    gamma = np.concatenate([rng.uniform(-1.5, 1.5, 20), [0.0, 1e-17, -np.pi / 2, np.pi / 2]])
+    S, n = 16, 4000                                   # n midpoints per sector: error ~ (pi/S/n)^2
+    u = (np.arange(n) + 0.5) / n
+    for weighting, f in (("cosine", lambda th, g: np.cos(th - g) * np.abs(np.sin(th))),
+                         ("uniform", lambda th, g: 0.5 * np.abs(np.sin(th)))):
+        w = sector_weights(gamma, S, weighting)
+        for k, g in enumerate(gamma):
+            edges = g - np.pi / 2 + np.pi * np.arange(S + 1) / S
+            th = edges[:-1, None] + (np.pi / S) * u[None, :]
+            quad = f(th, g).mean(axis=1) * (np.pi / S)
+            # the midpoint rule's error on the kink of |sin| at 0: (pi / S / n)^2 x O(1)
+            np.testing.assert_allclose(w[k], quad, rtol=0, atol=1e-8)
+    for S in (1, 7, 32, 64):
+        for weighting in ("cosine", "uniform", "bitcount") + (("eevee",) if S == 32 else ()):
+            open_ = rng.random((len(gamma), S)) < 0.5
+            mask = np.zeros(len(gamma), dtype=np.uint64)
+            for i in range(S):
+                mask |= np.where(open_[:, i], np.uint64(0), np.uint64(1) << np.uint64(i))
+            assert np.all(mask <= _LOW[S])
+            sl = SimpleNamespace(gamma=gamma, sin_g=np.sin(gamma), cos_g=np.cos(gamma))
+            got = _Weights(S, weighting).open_weight(mask, sl)
+            want = (open_ * sector_weights(gamma, S, weighting)).sum(axis=1)
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-13)
