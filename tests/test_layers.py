@@ -56,3 +56,86 @@ def test_gbuffer_carries_intervals_through_astype():
         gb.with_intervals(SolidIntervals(np.ones((1, 2, 2)), np.ones((1, 2, 2))))
     with pytest.raises(ValueError, match="SolidIntervals"):
         gb.with_intervals(np.ones((1, 4, 4)))
+
+
+# ------------------------------------------------------------------ the enter/leave rule
+from vobscure.layers import PeeledLayers, intervals_from_layers  # noqa: E402
+
+E, L, S = "enter", "leave", "sheet"
+
+
+def _one_ray(events, origin_inside=None):
+    """Intervals of one pixel whose ray crosses ``events`` [(depth, kind), ...] in order."""
+    K = len(events)
+    depth = np.array([z for z, _ in events], float).reshape(K, 1, 1)
+    kinds = [k for _, k in events]
+    layers = PeeledLayers(depth, np.zeros((K, 1, 1), int),
+                          np.array([k == E for k in kinds]).reshape(K, 1, 1),
+                          face_normals=[[0, 0, 1]], rotation=np.eye(3),
+                          open_surface=np.array([k == S for k in kinds]).reshape(K, 1, 1))
+    inside = None if origin_inside is None else np.array([[origin_inside]])
+    s = intervals_from_layers(layers, origin_inside=inside)
+    pairs = list(zip(s.front[:, 0, 0].tolist(), s.back[:, 0, 0].tolist()))
+    return [p for p in pairs if p != (INF, INF)]
+
+
+@pytest.mark.parametrize("events, expected", [
+    ([(1, E), (2, L)], [(1, 2)]),                                   # a box
+    ([(1, E), (2, L), (3, E), (4, L)], [(1, 2), (3, 4)]),           # two boxes
+    ([(1, E), (2, L), (3, E)], [(1, 2), (3, INF)]),                 # the layers ran out inside
+    ([(1, L), (3, E), (4, L)], [(0, 1), (3, 4)]),                   # the camera inside
+    ([(1, E), (2, L), (3, L)], [(1, 3)]),                           # touching: the entry at 2 skipped
+    ([(1, E), (2, E), (3, L)], [(1, 3)]),                           # touching: the leave at 2 skipped
+    ([(1, E), (2, E), (3, L), (4, L)], [(1, 4)]),                   # overlapping solids
+    ([(1, E), (2, E), (3, L), (4, L), (5, E), (6, L)], [(1, 4), (5, 6)]),
+    ([(1, S), (2, E), (3, S), (4, L), (5, S)], [(1, 1), (2, 4), (5, 5)]),   # open sheets
+    ([(1, S), (2, L)], [(1, 2)]),                                   # a leave after a sheet extends it
+    ([], []),
+])
+def test_enter_leave_rule_by_hand(events, expected):
+    if not events:   # a pixel with no surface: one unused slot
+        layers = PeeledLayers(np.full((2, 1, 1), INF), np.full((2, 1, 1), -1), np.zeros((2, 1, 1), bool),
+                              face_normals=[[0, 0, 1]], rotation=np.eye(3))
+        s = intervals_from_layers(layers)
+        assert s.count == 1 and np.isinf(s.front).all() and np.isinf(s.back).all()
+        return
+    assert _one_ray(events) == expected
+
+
+def test_first_leave_with_the_origin_outside_starts_at_the_surface():
+    # a ray through an edge shared with a touching solid: leave (the wall's top) then leave
+    # (the ceiling's top); the camera is not inside the wall
+    assert _one_ray([(1, L), (2, L)], origin_inside=False) == [(1, 2)]
+    assert _one_ray([(1, L), (2, L)], origin_inside=True) == [(0, 2)]
+    assert _one_ray([(1, L), (3, E), (4, L)], origin_inside=False) == [(1, 1), (3, 4)]
+
+
+def test_documented_limit_three_solids_in_a_chain():
+    """A overlaps B, B overlaps C, A and C apart: the rule leaves a gap inside B (documented)."""
+    assert _one_ray([(1, E), (2, E), (3, L), (4, E), (5, L), (6, L)]) == [(1, 3), (4, 6)]
+
+
+def test_rounding_never_reorders_layers():
+    # float32 depths one ulp out of order (a face hit twice at a grazing edge)
+    z = np.float32(2.0)
+    below = np.nextafter(z, np.float32(0))
+    assert _one_ray([(1, E), (float(z), L), (float(below), E), (3, L)]) == [(1, 2), (2, 3)]
+
+
+def test_peeled_layers_errors_and_astype_keeps_them():
+    ok = dict(face_normals=[[0, 0, 1]], rotation=np.eye(3))
+    with pytest.raises(ValueError, match="depth must have shape"):
+        PeeledLayers(np.ones((2, 2)), np.zeros((2, 2), int), np.zeros((2, 2), bool), **ok)
+    with pytest.raises(ValueError, match="primitive must be an integer array"):
+        PeeledLayers(np.ones((1, 2, 2)), np.zeros((1, 2, 2)), np.zeros((1, 2, 2), bool), **ok)
+    with pytest.raises(ValueError, match="entering must be a bool array"):
+        PeeledLayers(np.ones((1, 2, 2)), np.zeros((1, 2, 2), int), np.zeros((1, 2, 2)), **ok)
+    with pytest.raises(ValueError, match="layers must be a vobscure.layers.PeeledLayers"):
+        intervals_from_layers(np.ones((1, 2, 2)))
+    layers = PeeledLayers(np.ones((1, 2, 2)), np.zeros((1, 2, 2), int), np.ones((1, 2, 2), bool), **ok)
+    s = intervals_from_layers(layers)
+    assert s.astype(np.float32).layers is layers
+    with pytest.raises(ValueError, match="layers must have the intervals' image shape"):
+        SolidIntervals(np.ones((1, 3, 3)), np.ones((1, 3, 3)), layers=layers)
+    with pytest.raises(ValueError, match="origin_inside must be a bool array"):
+        intervals_from_layers(layers, origin_inside=np.ones((2, 2)))

@@ -167,3 +167,16 @@ def test_fast_segment_kernel_blocks_do_not_change_values(outside_view, monkeypat
     split = vo.vo_reference(outside_view, radius=RADIUS, samples=64)
     np.testing.assert_array_equal(one.value, split.value)
     np.testing.assert_array_equal(one.stderr, split.stderr)
+
+
+@pytest.mark.parametrize("n, grid", [(128, (8, 16)), (100, (10, 10)), (6, (2, 3)), (7, (3, 3)), (22, (5, 5))])
+def test_stratified_square_puts_one_point_per_cell(n, grid):
+    """A full a x b grid when n factors into cells at most twice as long as wide (8 x 16 for
+    128), else n distinct cells of the smallest square grid holding n (3 x 3 for 7, 5 x 5 for 22)."""
+    a, b = grid
+    u = P._stratified_square(np.random.default_rng(3), n)
+    assert u.shape == (n, 2) and ((u >= 0) & (u < 1)).all()
+    cells = set(zip((u[:, 0] * a).astype(int).tolist(), (u[:, 1] * b).astype(int).tolist()))
+    assert len(cells) == n
+    if a * b == n:
+        assert cells == {(i, j) for i in range(a) for j in range(b)}

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .references import SCREEN_SAMPLES
+
 __all__ = ["main", "render"]
 
 DEFAULT_SCENE = "cornell_box"
@@ -101,8 +103,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--rays", type=int, default=256, help="rays per pixel of ao/obscurance (default 256)")
     c.add_argument("--volume-samples", "--samples", dest="volume_samples", type=int, default=1024,
                    help="points per ball of the world-space VO (default 1024)")
-    c.add_argument("--screen-samples", type=int, default=1024,
-                   help="view-ray segments per pixel of the converged screen-space VO (default 1024)")
+    c.add_argument("--screen-samples", type=int, default=SCREEN_SAMPLES,
+                   help=f"view-ray segments per pixel of the converged screen-space VO (default {SCREEN_SAMPLES})")
     c.add_argument("--orbit", type=int, default=0, metavar="N", help="N-frame camera orbit: temporal flicker")
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--target-rmse", type=float, default=None, metavar="X",

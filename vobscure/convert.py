@@ -54,7 +54,8 @@ class NormalsRepairedWarning(UserWarning):
 
 
 def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_space, view,
-                    normal_encoding, convention, background, origin, normal_tol, repair_normals) -> dict:
+                    normal_encoding, convention, background, origin, normal_tol, repair_normals,
+                    back_depth=None) -> dict:
     """The keyword arguments of a :class:`~vobscure.gbuffer.GBuffer` holding ``depth`` and
     ``normal`` converted to the library's conventions.
 
@@ -68,6 +69,9 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
     normal : (H, W, 3) array_like or None
     camera, depth_kind, near, far, normal_space, view, normal_encoding, convention, background, origin, normal_tol, repair_normals
         As in :meth:`GBuffer.from_arrays <vobscure.gbuffer.GBuffer.from_arrays>`.
+    back_depth : (H, W) array_like of float or None
+        As in :meth:`GBuffer.from_arrays <vobscure.gbuffer.GBuffer.from_arrays>`; given, the
+        result also holds ``intervals``.
 
     Returns
     -------
@@ -75,7 +79,9 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
         ``depth`` (H, W) linear depth, +inf on background; ``normal`` (H, W, 3) view-space
         unit normals facing the camera, 0 on background; ``valid`` (H, W) bool;
         ``primitive`` (-1 everywhere); ``hits`` None (derived from depth and normals);
-        ``dtype``; ``view_to_world`` (R, t) of ``view`` or None; ``conversion`` (the counts).
+        ``dtype``; ``view_to_world`` (R, t) of ``view`` or None; ``conversion`` (the counts);
+        with ``back_depth``, ``intervals`` (a one-interval
+        :class:`~vobscure.layers.SolidIntervals`).
 
     Examples
     --------
@@ -169,9 +175,57 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
     counts.update(depth_kind=depth_kind, normal_space=None if nrm is None else normal_space,
                   normal_encoding=None if nrm is None else normal_encoding, convention=convention)
     H, W = camera.shape
-    return dict(depth=linear, normal=n_view, valid=covered,
-                primitive=np.broadcast_to(np.int64(-1), (H, W)), hits=None, dtype=dtype,
-                view_to_world=view_frame, conversion=counts)
+    out = dict(depth=linear, normal=n_view, valid=covered,
+               primitive=np.broadcast_to(np.int64(-1), (H, W)), hits=None, dtype=dtype,
+               view_to_world=view_frame, conversion=counts)
+    if back_depth is not None:
+        out["intervals"], back_counts = _back_interval(back_depth, linear, covered, camera=camera,
+                                                       depth_kind=depth_kind, near=near, far=far,
+                                                       background=background, origin=origin,
+                                                       depth_shape=given.shape, normal_shape=nshape)
+        counts.update(back_counts)
+    return out
+
+
+def _back_interval(back_depth, linear, covered, *, camera, depth_kind, near, far, background, origin,
+                   depth_shape, normal_shape):
+    """The one-interval :class:`~vobscure.layers.SolidIntervals` ``[depth, back]`` of a
+    back-face depth image, and its counts ``back_background`` (covered pixels whose back is
+    background or non-finite: +inf, the end unseen) and ``back_clamped`` (back in front of the
+    front, by rounding: set to the front)."""
+    from .layers import SolidIntervals
+
+    given = as_numeric(back_depth, "back_depth", expected="a numeric (H, W) array")
+    if given.shape != camera.shape:
+        err = _shape_error("back_depth", given.shape, camera, depth_shape, normal_shape)
+        raise ValueError(str(err).replace("arrays given: ", f"arrays given: back_depth {given.shape}, "))
+    if origin == "lower":
+        given = given[::-1]
+    raw = given.astype(np.float64)
+    bg, _ = _background(raw, given, depth_kind, background)
+    use = covered & ~bg                   # a back value to read: the front is covered and it is not background
+    values = raw[use]
+    if depth_kind in _RANGES:
+        lo, hi = _RANGES[depth_kind]
+        outside = int(np.count_nonzero((values < lo) | (values > hi)))
+        if outside:
+            raise ValueError(f"back_depth (depth_kind={depth_kind!r}) must lie in [{lo}, {hi}] where it is "
+                             f"not background; {outside} value(s) do not")
+    z = _linearize(values, depth_kind, near, far, camera,
+                   _view_rays(camera)[use] if depth_kind == "distance" else None)
+    bad = ~(z > 0)
+    if bad.any():
+        raise ValueError(f"back_depth must give a positive linear depth where it is not background; "
+                         f"{int(bad.sum())} pixel(s) do not (depth_kind={depth_kind!r}, values like "
+                         f"{values[bad][:3].tolist()})")
+    back = np.full(raw.shape, np.inf)
+    back[use] = z
+    with np.errstate(invalid="ignore"):
+        ahead = covered & (back < linear)
+    back[ahead] = linear[ahead]
+    back[~covered] = np.inf
+    counts = {"back_background": int(np.count_nonzero(covered & bg)), "back_clamped": int(ahead.sum())}
+    return SolidIntervals(linear[None], back[None]), counts
 
 
 def _shape_error(name, arr_shape, camera, depth_shape=None, normal_shape=None) -> ValueError:

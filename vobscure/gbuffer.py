@@ -263,7 +263,7 @@ class GBuffer:
     def from_arrays(cls, depth, normal=None, *, camera, depth_kind="linear", near=None, far=None,
                     normal_space="view", view=None, normal_encoding="signed", convention="vobscure",
                     background=None, origin="upper", normal_tol=NORMAL_LENGTH_TOL,
-                    repair_normals=False) -> "GBuffer":
+                    repair_normals=False, back_depth=None) -> "GBuffer":
         """A G-buffer from your own depth (and normal) images, converted to the library's
         conventions.
 
@@ -328,6 +328,16 @@ class GBuffer:
             What to do with zero or NaN normals on covered pixels: False (default) raise a
             ValueError that counts them; True derive those from the depth and warn
             (:class:`NormalsRepairedWarning`) with the count.
+        back_depth : (H, W) array_like of float, optional
+            A back-face depth pass (the depth of the farthest, or the first back-facing,
+            surface: what an engine renders with the depth test or the culling reversed), in
+            the conventions of ``depth`` (``depth_kind``, ``near``, ``far``, ``background``,
+            ``origin``). It makes ``gb.intervals`` a one-interval
+            :class:`~vobscure.layers.SolidIntervals` ``[depth, back]`` (``docs/layers.md``):
+            where it is background or non-finite the back is +inf (the solid's end unseen);
+            where it lies in front of the depth (rounding) it is set to the depth and counted in
+            ``conversion["back_clamped"]`` (``conversion["back_background"]`` counts the
+            former on covered pixels); on background pixels the slot is unused.
 
         Returns
         -------
@@ -339,7 +349,8 @@ class GBuffer:
             ``pixels``, ``covered``, ``background`` (of which ``nonfinite``),
             ``renormalized``, ``flipped`` (normals turned to face the camera), ``repaired``,
             ``derived`` (pixels whose normal came from the depth), ``undetermined`` (derived
-            normals without a neighbour in x or y, set to face the camera) and the arguments
+            normals without a neighbour in x or y, set to face the camera), with
+            ``back_depth`` ``back_background`` and ``back_clamped``, and the arguments
             ``depth_kind``, ``normal_space``, ``normal_encoding``, ``convention``.
 
         Raises
@@ -387,12 +398,20 @@ class GBuffer:
         ([3.0, 3.0, 3.0, 3.0], [0.0, 0.0, -1.0])
         >>> float(vo.vo_line(gb, radius=0.5, normal_clamp=True)[1, 1])
         1.0
+
+        A back-face pass 0.25 behind it: one solid interval per pixel.
+
+        >>> z_back = (f + n) / (f - n) - 2 * f * n / ((f - n) * (z + 0.25))
+        >>> gb = vo.GBuffer.from_arrays(z_ndc, camera=cam, depth_kind="ndc", near=n, far=f, back_depth=z_back)
+        >>> round(float(gb.intervals.front[0, 1, 1]), 9), round(float(gb.intervals.back[0, 1, 1]), 9)
+        (3.0, 3.25)
         """
         return cls(camera, **convert_buffers(depth, normal, camera=camera, depth_kind=depth_kind,
                                              near=near, far=far, normal_space=normal_space, view=view,
                                              normal_encoding=normal_encoding, convention=convention,
                                              background=background, origin=origin,
-                                             normal_tol=normal_tol, repair_normals=repair_normals))
+                                             normal_tol=normal_tol, repair_normals=repair_normals,
+                                             back_depth=back_depth))
 
     @staticmethod
     def derive_normals(camera, depth) -> np.ndarray:

@@ -6,14 +6,16 @@ ray of each pixel, the view-depth intervals ``[front, back]`` inside solids (dep
 Everitt 2001; the deep G-buffer of Mara et al. 2016 keeps two such layers).
 :class:`SolidIntervals` is that knowledge in the form the estimators read it, whatever made it
 (:func:`vobscure.render_gbuffer` with ``layers=K``, or an engine's back-face depth pass through
-:meth:`vobscure.GBuffer.from_arrays`).
+:meth:`vobscure.GBuffer.from_arrays`). :class:`PeeledLayers` keeps the surfaces themselves (the
+first K along each ray) and :func:`intervals_from_layers` turns them into intervals by the
+enter/leave rule documented there (``docs/layers.md``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SolidIntervals"]
+__all__ = ["SolidIntervals", "PeeledLayers", "intervals_from_layers", "ray_intervals"]
 
 
 class SolidIntervals:
@@ -32,6 +34,9 @@ class SolidIntervals:
         Entry and exit depths, M >= 1 intervals per pixel.
     dtype : numpy dtype, optional
         float64 (default) or float32.
+    layers : PeeledLayers, optional
+        The surfaces the intervals were made of (depth peeling); None when they came from
+        elsewhere (a back-face depth pass, or made by hand).
 
     Attributes
     ----------
@@ -39,6 +44,8 @@ class SolidIntervals:
         Read-only.
     count : int
         M, the interval slots per pixel.
+    layers : PeeledLayers or None
+        See Parameters; kept by :meth:`astype`.
 
     Examples
     --------
@@ -52,7 +59,7 @@ class SolidIntervals:
     [True, False, True]
     """
 
-    def __init__(self, front, back, *, dtype=np.float64):
+    def __init__(self, front, back, *, dtype=np.float64, layers=None):
         self.dtype = np.dtype(dtype)
         if self.dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
             raise ValueError(f"dtype must be float32 or float64, got {self.dtype}")
@@ -74,8 +81,14 @@ class SolidIntervals:
             if not (gap | unused).all():
                 raise ValueError("the intervals of a pixel must be ascending and disjoint "
                                  "(front[m + 1] >= back[m]), unused slots (+inf) last")
+        if layers is not None:
+            if not isinstance(layers, PeeledLayers):
+                raise ValueError(f"layers must be a vobscure.layers.PeeledLayers or None, got {type(layers).__name__}")
+            if layers.shape != f.shape[1:]:
+                raise ValueError(f"layers must have the intervals' image shape {f.shape[1:]}, got {layers.shape}")
         self.front = _frozen(f)
         self.back = _frozen(b)
+        self.layers = layers
 
     @property
     def count(self) -> int:
@@ -97,11 +110,266 @@ class SolidIntervals:
         return ((f <= z) & (z <= b)).any(axis=0)
 
     def astype(self, dtype) -> "SolidIntervals":
-        return SolidIntervals(self.front, self.back, dtype=dtype)
+        return SolidIntervals(self.front, self.back, dtype=dtype, layers=self.layers)
 
     def __repr__(self) -> str:
         H, W = self.shape
         return f"SolidIntervals({self.count} per pixel, {W}x{H}, {self.dtype})"
+
+
+class PeeledLayers:
+    """The first K surfaces along every pixel's ray (depth peeling), as
+    :func:`vobscure.render_gbuffer` with ``layers=K`` finds them.
+
+    Layer 0 is the G-buffer's own surface; layer k the (k+1)-th surface the pixel centre's ray
+    crosses (alpha-tested holes are passed, as the tracer passes them). Stored per pixel per
+    layer: 9 bytes (float32 depth, int32 triangle, bool entering); the normals are not stored
+    but made on access from the triangles.
+
+    Parameters
+    ----------
+    depth : (K, H, W) array_like of float
+        Linear view depth z of each surface (float32 when stored); +inf where the ray crossed
+        fewer than k + 1 surfaces. Non-decreasing along k.
+    primitive : (K, H, W) array_like of int
+        The triangle (index into ``scene.triangles``), -1 where there is no surface.
+    entering : (K, H, W) array_like of bool
+        True where the ray enters the solid behind the surface: the triangle's outward
+        (winding) normal points against the ray, ``n . d < 0``; False where it leaves one, or
+        where there is no surface.
+    face_normals : (m, 3) array_like of float
+        Unit outward (winding) normals of the triangles in world space (``scene.face_normals``;
+        kept by reference, not copied).
+    rotation : (3, 3) array_like of float
+        The camera's world -> view rotation (``camera.rotation``).
+    open_surface : (K, H, W) array_like of bool, optional
+        True where the surface belongs to an open mesh (``scene.open_meshes``): it bounds no
+        solid. Default: all False.
+
+    Attributes
+    ----------
+    depth : (K, H, W) float32
+    primitive : (K, H, W) int32
+    entering, open_surface : (K, H, W) bool
+    count : int
+        K.
+    nbytes : int
+        Bytes held per pixel, all layers: 9 K, plus K for ``open_surface`` when any surface is
+        open (None otherwise).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> depth = np.array([[[1.0]], [[2.0]]])              # one pixel, a solid from 1 to 2
+    >>> layers = PeeledLayers(depth, [[[0]], [[1]]], [[[True]], [[False]]],
+    ...                       face_normals=[[0, 0, -1], [0, 0, 1]], rotation=np.eye(3))
+    >>> layers.count, layers.normal[:, 0, 0].tolist()
+    (2, [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]])
+    >>> intervals_from_layers(layers).front[:, 0, 0].tolist(), intervals_from_layers(layers).back[:, 0, 0].tolist()
+    ([1.0], [2.0])
+    """
+
+    def __init__(self, depth, primitive, entering, *, face_normals, rotation, open_surface=None):
+        z = np.asarray(depth, dtype=np.float32)
+        if z.ndim != 3 or z.shape[0] < 1:
+            raise ValueError(f"depth must have shape (K, H, W) with K >= 1, got {z.shape}")
+        prim = np.asarray(primitive)
+        if prim.shape != z.shape or prim.dtype.kind not in "iu":
+            raise ValueError(f"primitive must be an integer array of the depth's shape {z.shape}, "
+                             f"got {prim.dtype} of shape {prim.shape}")
+        enter = np.asarray(entering)
+        if enter.shape != z.shape or enter.dtype != bool:
+            raise ValueError(f"entering must be a bool array of the depth's shape {z.shape}, "
+                             f"got {enter.dtype} of shape {enter.shape}")
+        if open_surface is None:
+            open_surface = np.broadcast_to(False, z.shape)
+        opened = np.asarray(open_surface)
+        if opened.shape != z.shape or opened.dtype != bool:
+            raise ValueError(f"open_surface must be a bool array of the depth's shape {z.shape}, "
+                             f"got {opened.dtype} of shape {opened.shape}")
+        self.depth = _frozen(z)
+        self.primitive = _frozen(prim.astype(np.int32, copy=False))
+        self.entering = _frozen(enter)
+        self.open_surface = _frozen(opened)
+        self._face_normals = np.asarray(face_normals, dtype=np.float64)
+        self._rotation = np.asarray(rotation, dtype=np.float64)
+        if self._face_normals.ndim != 2 or self._face_normals.shape[1] != 3:
+            raise ValueError(f"face_normals must have shape (m, 3), got {self._face_normals.shape}")
+        if self._rotation.shape != (3, 3):
+            raise ValueError(f"rotation must have shape (3, 3), got {self._rotation.shape}")
+
+    @property
+    def count(self) -> int:
+        return int(self.depth.shape[0])
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return tuple(self.depth.shape[1:])
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the stored per-layer images (depth, primitive, entering, open_surface)."""
+        opened = self.open_surface.nbytes if self.open_surface.strides[0] else 0
+        return int(self.depth.nbytes + self.primitive.nbytes + self.entering.nbytes + opened)
+
+    @property
+    def normal(self) -> np.ndarray:
+        """(K, H, W, 3) float32 view-space outward normals of the surfaces, as the meshes wind
+        them (not turned to face the camera; ``n_z > 0`` where the ray leaves a solid); 0 where
+        there is no surface. Made on each access from the triangles (12 bytes per pixel per
+        layer while held)."""
+        prim = self.primitive
+        out = np.zeros(prim.shape + (3,), dtype=np.float32)
+        hit = prim >= 0
+        out[hit] = self._face_normals[prim[hit]] @ self._rotation.T
+        out += 0.0   # no negative zeros
+        return out
+
+    def __repr__(self) -> str:
+        H, W = self.shape
+        return f"PeeledLayers({self.count} per pixel, {W}x{H})"
+
+
+def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None,
+                          origin_inside=None) -> SolidIntervals:
+    """The solid intervals of peeled layers, by the enter/leave rule.
+
+    Along each pixel's ray the surfaces are read in order with one state, inside or outside:
+
+    - entering a solid from outside opens an interval at its depth; entering while inside
+      changes nothing (overlapping solids, or a leave the peeling skipped because it
+      coincided with this surface, as where a box stands on a floor);
+    - leaving from inside closes the interval; leaving from outside extends the previous
+      interval to this depth (a solid whose entry coincided with the previous surface and was
+      skipped, or overlapping solids). When there is no previous interval (the first surface
+      leaves a solid) and the ray's origin is inside that solid (``origin_inside``), the camera
+      is inside it: the interval starts at the near plane z = 0. Otherwise the entry coincided
+      with this very surface (a ray through the edge of a face that touches another solid's,
+      where the tracer may report either): the interval starts here, ``[z, z]``, and the next
+      leave extends it;
+    - a surface of an open mesh (``open_surface``) bounds no solid: seen from outside it is a
+      zero-thickness interval ``[z, z]`` (a surface of no depth, which an occupancy test never
+      counts but which tells a thickness estimate that nothing solid lies behind it); inside
+      a solid it changes nothing;
+    - an interval still open after the K layers ends at +inf (its end was not seen).
+
+    For solids that do not overlap, and touch at most in pairs, this is the union of the
+    solids along the ray, within the K layers. It can be wrong where three solids chain along
+    one ray (A overlaps B, B overlaps C, A and C apart: a gap appears inside B), and when the
+    camera is inside a solid that holds another (the interval starts at the inner solid).
+
+    Parameters
+    ----------
+    layers : PeeledLayers
+    dtype : numpy dtype, optional
+        Of the intervals.
+    depth : (K, H, W) array_like of float, optional
+        The layers' depths at a higher precision than the stored float32 (the renderer passes
+        its float64 depths); default ``layers.depth``.
+    origin_inside : (H, W) array_like of bool, optional
+        Where the first surface leaves a solid: whether the ray's origin (the camera) is inside
+        that solid (the renderer asks the mesh, ``trimesh.Trimesh.contains``). Default: True
+        everywhere (a first leave means the camera is inside).
+
+    Returns
+    -------
+    SolidIntervals
+        With M = the most intervals of any pixel (at least 1) slots, and ``layers`` attached.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> # one pixel: enter 1, leave 2, leave 3 (a second solid touching the first at 2)
+    >>> layers = PeeledLayers(np.array([1.0, 2.0, 3.0]).reshape(3, 1, 1), np.zeros((3, 1, 1), int),
+    ...                       np.array([True, False, False]).reshape(3, 1, 1),
+    ...                       face_normals=[[0, 0, 1]], rotation=np.eye(3))
+    >>> s = intervals_from_layers(layers)
+    >>> s.front.ravel().tolist(), s.back.ravel().tolist()
+    ([1.0], [3.0])
+    """
+    if not isinstance(layers, PeeledLayers):
+        raise ValueError(f"layers must be a vobscure.layers.PeeledLayers, got {type(layers).__name__}")
+    K = layers.count
+    H, W = layers.shape
+    z = layers.depth if depth is None else np.asarray(depth)
+    if z.shape != (K, H, W):
+        raise ValueError(f"depth must have the layers' shape {(K, H, W)}, got {z.shape}")
+    inside = None
+    if origin_inside is not None:
+        inside = np.asarray(origin_inside)
+        if inside.shape != (H, W) or inside.dtype != bool:
+            raise ValueError(f"origin_inside must be a bool array of shape {(H, W)}, got "
+                             f"{inside.dtype} of shape {inside.shape}")
+        inside = inside.reshape(-1)
+    front, back = ray_intervals(z.reshape(K, -1), layers.primitive.reshape(K, -1) >= 0,
+                                  layers.entering.reshape(K, -1), layers.open_surface.reshape(K, -1),
+                                  inside)
+    M = front.shape[0]
+    return SolidIntervals(front.reshape(M, H, W), back.reshape(M, H, W), dtype=dtype, layers=layers)
+
+
+def ray_intervals(z, hit, entering, open_surface, origin_inside=None) -> tuple[np.ndarray, np.ndarray]:
+    """The enter/leave rule of :func:`intervals_from_layers` on flat arrays of n rays.
+
+    Parameters
+    ----------
+    z : (K, n) array_like of float
+        View depth of each ray's k-th surface (+inf where none).
+    hit, entering, open_surface : (K, n) array_like of bool
+        Whether there is a k-th surface, whether the ray enters a solid there, whether it is
+        open (see :class:`PeeledLayers`).
+    origin_inside : (n,) array_like of bool, optional
+        As in :func:`intervals_from_layers`; None: all True.
+
+    Returns
+    -------
+    front, back : (M, n) float64
+        M the most intervals of any ray, at least 1; unused slots +inf.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f, b = ray_intervals(np.array([[1.0], [2.0]]), np.ones((2, 1), bool),
+    ...                      np.array([[True], [False]]), np.zeros((2, 1), bool))
+    >>> f.tolist(), b.tolist()
+    ([[1.0]], [[2.0]])
+    """
+    K, n = z.shape
+    z = np.maximum.accumulate(np.asarray(z, dtype=np.float64), axis=0)   # rounding never reorders
+    front = np.full((K, n), np.inf)
+    back = np.full((K, n), np.inf)
+    used = np.zeros(n, dtype=np.int64)           # intervals written per ray
+    inside = np.zeros(n, dtype=bool)
+    start = np.zeros(n)
+    for k in range(K):
+        zk, h, op = z[k], hit[k], open_surface[k]
+        solid = h & ~op
+        sheet = np.flatnonzero(h & op & ~inside)                 # [z, z], outside only
+        front[used[sheet], sheet] = zk[sheet]
+        back[used[sheet], sheet] = zk[sheet]
+        used[sheet] += 1
+        opening = solid & entering[k] & ~inside
+        start[opening] = zk[opening]
+        leave = solid & ~entering[k]
+        close = np.flatnonzero(leave & inside)
+        front[used[close], close] = start[close]
+        back[used[close], close] = zk[close]
+        used[close] += 1
+        stray = leave & ~inside                                   # a leave without its entry
+        extend = np.flatnonzero(stray & (used > 0))
+        back[used[extend] - 1, extend] = zk[extend]
+        first = np.flatnonzero(stray & (used == 0))               # no interval before it
+        camera = first if origin_inside is None else first[origin_inside[first]]
+        front[0, first] = zk[first]                                # the entry was here...
+        front[0, camera] = 0.0                                     # ...or the camera is inside
+        back[0, first] = zk[first]
+        used[first] = 1
+        inside = (inside | opening) & ~leave
+    unseen = np.flatnonzero(inside)                               # the layers ran out inside
+    front[used[unseen], unseen] = start[unseen]
+    used[unseen] += 1
+    M = max(1, int(used.max()) if n else 1)
+    return front[:M].copy(), back[:M].copy()
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

@@ -439,7 +439,14 @@ GTAO_STEPS = 3
 VBAO_STEPS = GTAO_STEPS
 HBAO_STEPS = 4
 
-register(Method("gtao", partial(gtao, steps=GTAO_STEPS), default_samples=3, fetch="bilinear", samples="slices",
+#: GTAO as the registry runs it, XeGTAO's "high" steps. Its ``thickness`` takes only the
+#: layers (``"layers"``), not the VO thickness model the experiments pass every method, so the
+#: registry does not see it (the signature without it): GTAO runs as without that option.
+_gtao = partial(gtao, steps=GTAO_STEPS)
+_gtao.__signature__ = inspect.signature(_gtao).replace(
+    parameters=[p for p in inspect.signature(_gtao).parameters.values() if p.name != "thickness"])
+
+register(Method("gtao", _gtao, default_samples=3, fetch="bilinear", samples="slices",
                 taps=_gtao_taps, quantity=_cosine_ao,
                 summary="GTAO (Jimenez et al. 2016): horizons per slice, cosine AO; SAMPLES = slices of 3 steps "
                         "a side"))

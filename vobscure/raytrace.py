@@ -586,22 +586,8 @@ class Tracer:
             # rejected hits: start again just beyond the hole, off the far side of its triangle
             rej = ~solid
             ray, org, dirs, lim, start, local = ray[rej], org[rej], dirs[rej], lim[rej], start[rej], local[rej]
-            org64, d64 = org.astype(np.float64), dirs.astype(np.float64)
-            dd = np.einsum("ij,ij->i", d64, d64)
-            unit = d64 / np.sqrt(dd)[:, None]
-            n_f = normals[local]
-            cos = np.einsum("ij,ij->i", n_f, unit)
-            side = np.where(cos >= 0.0, 1.0, -1.0)
-            q = org64 + t[rej, None] * d64                   # the hit, on the ray's line
-            past = side * (np.einsum("ij,ij->i", n_f, q) - planes[local])   # how far beyond the plane
-            # Stay on the ray's line, at `offset` beyond the plane; a ray within COS_GRAZING of
-            # the plane steps `offset` along itself and `offset` off the plane instead.
-            graze = np.abs(cos) < COS_GRAZING
-            step = np.where(graze, self.offset, (self.offset - past) / np.maximum(np.abs(cos), COS_GRAZING))
-            moved = q + step[:, None] * unit
-            moved[graze] += self.offset * side[graze, None] * n_f[graze]
-            start = start + np.einsum("ij,ij->i", moved - org64, d64) / dd
-            org = moved.astype(np.float32)
+            org, advance = _past_plane(org, dirs, t[rej], normals[local], planes[local], self.offset)
+            start = start + advance
             going = start < lim
             if not going.all():
                 ray, org, dirs, lim, start = ray[going], org[going], dirs[going], lim[going], start[going]
@@ -610,6 +596,49 @@ class Tracer:
                                f"passes over {len(self._masked_ids)} masked triangles; the masked geometry "
                                "sends rays around a cycle (please report the scene)")
         return dist, prim, bary
+
+    def continue_rays(self, origins, directions, hits: Hits) -> tuple[np.ndarray, np.ndarray]:
+        """Origins that continue rays past their hits, for the next hit behind (depth peeling).
+
+        Each hit ray restarts on its own line :attr:`offset` beyond the plane of the triangle it
+        hit (within ``COS_GRAZING`` of that plane: ``offset`` along itself and ``offset`` off
+        the plane on the far side), the policy of the alpha loop (module notes). Surfaces closer
+        than that behind the hit (a coincident face of a touching solid) are not seen.
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float
+            The rays of the last query.
+        hits : Hits
+            Its result; only the hit rays (``hits.hit``) are continued.
+
+        Returns
+        -------
+        origins : (k, 3) float32
+            The new origins of the k hit rays, in the order of ``np.flatnonzero(hits.hit)``.
+        advance : (k,) float64
+            Ray parameter of each new origin along the old ray (for unit directions, the
+            distance from the old origin): add it to the next query's distances.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> tri = np.array([[[-1, 0, -1], [1, 0, -1], [0, 0, 1]],
+        ...                 [[-1, -1, -1], [0, -1, 1], [1, -1, -1]]], float)   # y = 0 and y = -1
+        >>> tracer = Tracer(tri)
+        >>> o, d = np.array([[0.0, 1.0, 0.0]]), np.array([[0.0, -1.0, 0.0]])
+        >>> first = tracer.intersect(o, d)
+        >>> o2, advance = tracer.continue_rays(o, d, first)
+        >>> second = tracer.intersect(o2, d)
+        >>> int(second.primitive[0]), round(float(advance[0] + second.distance[0]), 5)
+        (1, 2.0)
+        """
+        hit = np.flatnonzero(hits.hit)
+        o = np.asarray(origins, dtype=np.float32).reshape(-1, 3)[hit]
+        d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)[hit]
+        prim = hits.primitive[hit]
+        planes = np.einsum("ij,ij->i", self.face_normals[prim], self.triangles[prim, 0])
+        return _past_plane(o, d, hits.distance[hit], self.face_normals[prim], planes, self.offset)
 
     def hit_points(self, hits: Hits) -> np.ndarray:
         """(n, 3) float64 hit positions rebuilt from barycentrics (NaN on a miss).
@@ -633,6 +662,26 @@ class Tracer:
         else:
             # list() propagates the first exception raised in a worker
             list(_pool(threads).map(work, chunks))
+
+
+def _past_plane(org, dirs, t, n_f, planes, offset) -> tuple[np.ndarray, np.ndarray]:
+    """Rays (float32 ``org``, ``dirs``) that hit the planes ``n_f . x = planes`` at ray parameter
+    ``t``, restarted just beyond them: the new float32 origins and their ray parameter along
+    the old rays (see :meth:`Tracer.continue_rays`)."""
+    org64, d64 = org.astype(np.float64), dirs.astype(np.float64)
+    dd = np.einsum("ij,ij->i", d64, d64)
+    unit = d64 / np.sqrt(dd)[:, None]
+    cos = np.einsum("ij,ij->i", n_f, unit)
+    side = np.where(cos >= 0.0, 1.0, -1.0)
+    q = org64 + t[:, None] * d64                   # the hit, on the ray's line
+    past = side * (np.einsum("ij,ij->i", n_f, q) - planes)   # how far beyond the plane
+    # Stay on the ray's line, at `offset` beyond the plane; a ray within COS_GRAZING of
+    # the plane steps `offset` along itself and `offset` off the plane instead.
+    graze = np.abs(cos) < COS_GRAZING
+    step = np.where(graze, offset, (offset - past) / np.maximum(np.abs(cos), COS_GRAZING))
+    moved = q + step[:, None] * unit
+    moved[graze] += offset * side[graze, None] * n_f[graze]
+    return moved.astype(np.float32), np.einsum("ij,ij->i", moved - org64, d64) / dd
 
 
 def _embree_scene(tri: np.ndarray):

@@ -264,7 +264,8 @@ def _row(result, metrics=METRICS) -> dict:
 
 def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=None, methods=None,
             normal_clamp: bool = False, thickness=None, references=None, repeats: int = 3,
-            rays: int = 256, volume_samples: int = 1024, screen_samples: int = 1024, seed: int = 0,
+            rays: int = 256, volume_samples: int = 1024,
+            screen_samples: int = _references.SCREEN_SAMPLES, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
             out=None, cache=True, progress: bool = False, plots: bool = True,
             write: bool = True, allow_open: bool = False) -> CompareResult:

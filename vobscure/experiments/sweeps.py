@@ -160,7 +160,7 @@ class SweepConfig:
     references: tuple = ("screen",)
     rays: int = 256
     volume_samples: int = 1024
-    screen_samples: int = 1024
+    screen_samples: int = _references.SCREEN_SAMPLES
     reference_seed: int = 0
     allow_open: bool = False
 

@@ -10,6 +10,9 @@
   patterns per pixel.
 - :func:`warper`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
 - :func:`tangent_plane_line`: the tangent plane's line coordinate (Loos & Sloan 2010, Sec. 4.4).
+- :func:`solid_intervals` / :func:`nearest_pixel` / :func:`inside_intervals` /
+  :func:`interval_back`: ``thickness="layers"``, the G-buffer's solid intervals read at the
+  pixel a sample or tap falls in.
 
 Used by the modules of :mod:`vobscure.screenspace` only (tests and benchmarks also reach in);
 the estimators' public arguments are documented on the estimators.
@@ -640,3 +643,107 @@ def out_dtype(gbuffer) -> np.dtype:
     return np.dtype(np.float32) if gbuffer.depth.dtype == np.float32 else np.dtype(np.float64)
 
 
+
+
+#: The ``thickness`` that reads the G-buffer's solid intervals instead of a model of what lies
+#: behind the depth buffer (:class:`vobscure.layers.SolidIntervals`, ``GBuffer.intervals``).
+LAYERS = "layers"
+
+
+def solid_intervals(gbuffer, thickness):
+    """The G-buffer's :class:`~vobscure.layers.SolidIntervals` when ``thickness == "layers"``,
+    None for any other non-string ``thickness`` (the caller validates numbers).
+
+    ValueError naming ``thickness`` for another string, or for ``"layers"`` when the G-buffer
+    carries no intervals (``gbuffer.intervals is None``).
+    """
+    if not isinstance(thickness, str):
+        return None
+    if thickness != LAYERS:
+        raise ValueError(f"thickness must be None, a positive number or {LAYERS!r}, got {thickness!r}")
+    intervals = as_gbuffer(gbuffer).intervals
+    if intervals is None:
+        raise ValueError(f"thickness={LAYERS!r} reads the G-buffer's solid intervals, but gbuffer.intervals is "
+                         f"None: render it with layers (render_gbuffer(..., layers=K)) or attach them with "
+                         f"gbuffer.with_intervals(SolidIntervals(front, back))")
+    return intervals
+
+
+def nearest_pixel(shape: tuple, x: np.ndarray, y: np.ndarray, *, offscreen: str) -> tuple[np.ndarray, np.ndarray]:
+    """The pixel :func:`fetch_depth` reads with ``fetch="nearest"`` at (x, y): ``(index, empty)``.
+
+    ``index`` (k,): flat row-major index of the pixel containing (x, y), clamped to the image
+    (the nearest border pixel for a point off it); ``empty`` (k,) bool: where the point reads
+    empty space instead, as the depth fetch reads +inf there: non-finite coordinates (a point
+    behind a perspective camera), and off the image with ``offscreen="open"``.
+    """
+    H, W = shape
+    finite = np.isfinite(x) & np.isfinite(y)
+    xs = np.where(finite, x, 0.0)
+    ys = np.where(finite, y, 0.0)
+    j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+    i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
+    empty = ~finite
+    if offscreen == "open":
+        empty |= (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H)
+    return i * W + j, empty
+
+
+def tap_pixel(px: Pixels, dj: np.ndarray, e: np.ndarray, *, offscreen: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, empty)`` of the pixels :func:`nearest_taps` reads at integer offsets (dj, e)
+    (``e`` rows up): the flat index, clamped to the image, and where the tap is off the image
+    with ``offscreen="open"`` (empty space)."""
+    H, W = px.shape
+    j = px.col + dj.astype(np.intp)
+    i = px.row - e.astype(np.intp)
+    inside = (j >= 0) & (j < W) & (i >= 0) & (i < H)
+    index = np.clip(i, 0, H - 1) * W + np.clip(j, 0, W - 1)
+    empty = ~inside if offscreen == "open" else np.zeros(len(index), dtype=bool)
+    return index, empty
+
+
+def interval_slots(intervals):
+    """The ``(front, back)`` of every interval slot as (M, H * W) views, for flat gathers."""
+    M = intervals.count
+    return intervals.front.reshape(M, -1), intervals.back.reshape(M, -1)
+
+
+def inside_intervals(intervals, index: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """(k,) bool: view depth ``z`` lies inside a solid interval of the pixel ``index``,
+    front < z < back.
+
+    Strict, as the depth test z > d of a single depth buffer: the intervals ``[d, +inf)``
+    then give that test bit for bit (an interval's ends have measure zero). One gather per
+    interval slot: the cost is linear in the slots M.
+    """
+    front, back = interval_slots(intervals)
+    z = np.asarray(z)
+    out = np.zeros(z.shape, dtype=bool)
+    for m in range(intervals.count):
+        out |= (front[m].take(index) < z) & (z < back[m].take(index))
+    return out
+
+
+def interval_back(intervals, index: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """(k,) the back of the first solid interval of pixel ``index`` that contains or follows
+    view depth ``d`` (back >= d); ``d`` itself where no interval ends at or behind ``d``.
+
+    For a tap whose depth ``d`` is the pixel's first surface (a nearest fetch of a peeled
+    G-buffer), it is the back of the pixel's first interval: the tapped occluder spans
+    [d, back] along the tap's view ray. ``+inf``: the occluder's end was not seen (solid
+    from ``d`` on, as a single depth buffer takes it). ``d`` itself (no interval at or behind
+    it: an interpolated depth between a thin surface and the background behind it) makes
+    the occluder a surface of no thickness.
+    """
+    front, back = interval_slots(intervals)
+    d = np.asarray(d, dtype=np.float64)
+    out = d.copy()
+    found = np.zeros(d.shape, dtype=bool)
+    for m in range(intervals.count):
+        f = front[m].take(index)
+        b = back[m].take(index)
+        # a slot is an interval when its front is finite (unused slots are +inf, +inf)
+        first = ~found & (b >= d) & (f < np.inf)
+        out[first] = b[first]
+        found |= first
+    return out

@@ -27,9 +27,16 @@ import numpy as np
 from . import _common as C
 from ._segment import BALL_MASS, PLANE_RTOL, ball_box
 
-#: Fewest pixels per block of the loop over rays: below it NumPy's cost per call dominates.
-#: Values do not depend on the blocks (every operation is per pixel).
-MIN_BLOCK = 4096
+#: Fewest pixels per block of the loop over rays. Two threads on blocks of 8192 pixels spent
+#: more CPU than one thread on the whole chunk (NumPy's calls on short arrays hand the GIL back
+#: and forth); from about 32768 pixels a block the second core pays (``benchmarks/
+#: bench_groundtruth.py``, benchmark 4). Values do not depend on the blocks (every operation
+#: is per pixel).
+MIN_BLOCK = 32768
+
+#: Valid pixels per chunk of :func:`vobscure.vo_reference`'s segment path: enough for one block
+#: per thread of :data:`MIN_BLOCK` pixels or more (about 1.5 kB of temporaries a pixel).
+CHUNK_PIXELS = 131072
 
 _POOL: list[ThreadPoolExecutor] = []
 
@@ -101,8 +108,9 @@ class DepthCells:
         H, W = self.shape
         if offscreen == "open":
             outside = (fx < -0.5) | (fx >= W - 0.5) | (fy < -0.5) | (fy >= H - 0.5)
-        np.clip(fx, 0.0, W - 1, out=fx)
-        np.clip(fy, 0.0, H - 1, out=fy)
+        # (np.maximum then np.minimum: the same values as np.clip at less than half its cost)
+        np.minimum(np.maximum(fx, 0.0, out=fx), W - 1, out=fx)
+        np.minimum(np.maximum(fy, 0.0, out=fy), H - 1, out=fy)
         j0 = np.floor(fx)
         i0 = np.floor(fy)
         fx -= j0                           # tx
@@ -271,7 +279,7 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             np.maximum(h2, 0.0, out=h2)
             h = np.sqrt(h2)
             mh = np.negative(h)
-            np.clip(cut, mh, h, out=cut)
+            np.minimum(np.maximum(cut, mh, out=cut), h, out=cut)
             away = c1 > 0          # the half-ball lies beyond the plane along the ray
             if normal_clamp:
                 lo_seg = np.where(away, cut, mh)
@@ -284,7 +292,7 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             # (under perspective the segment lies in z > 0, so max(d, 0) - z_m and d - z_m
             # clip to the same lo)
             lo = d - z_m if persp else np.maximum(d, 0.0) - z_m
-            np.clip(lo, lo_seg, hi_seg, out=lo)
+            np.minimum(np.maximum(lo, lo_seg, out=lo), hi_seg, out=lo)
             q = np.subtract(d, zp, out=zp)                  # d minus the plane's depth
             np.abs(q, out=q)
             # (< rather than <=: a background d = inf is not on the plane)
@@ -307,7 +315,7 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 else:
                     hi = d + thickness
                     hi -= z_m
-                    np.clip(hi, lo_seg, hi_seg, out=hi)
+                    np.minimum(np.maximum(hi, lo_seg, out=hi), hi_seg, out=hi)
                     np.maximum(hi, lo, out=hi)
                 contrib = _antiderivative(hi, z_m, zz, h2, persp, quadratic, F_b)
                 contrib -= F_lo

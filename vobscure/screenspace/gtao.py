@@ -44,7 +44,7 @@ def _inner_integral(h, gamma, sin_g, cos_g):
 
 
 def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_range: float = 0.0,
-         thin_occluder: float = 0.0, power: float = 1.0, normal_fudge: float = 0.0,
+         thin_occluder: float = 0.0, thickness=None, power: float = 1.0, normal_fudge: float = 0.0,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
          noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
     """Cosine-weighted ambient occlusion within ``radius`` by horizon search (GTAO).
@@ -80,6 +80,16 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
         XeGTAO's thin-occluder compensation (>= 0, default 0): the distance tested against
         the radius stretches the tap's depth offset by (1 + thin_occluder), so occluders far
         in front of or behind p drop out sooner.
+    thickness : None or "layers", optional
+        ``"layers"``: the occluders' true thickness from the G-buffer's solid intervals
+        (``gbuffer.intervals``, from ``render_gbuffer(..., layers=K)`` or
+        :meth:`vobscure.GBuffer.with_intervals`). A tap's occluder spans its view ray from the
+        tapped depth to the back of the first solid interval of the tapped pixel that ends at
+        or behind that depth; a tap whose occluder lies wholly above the current horizon (the
+        horizon's line passes behind the occluder's back) does not raise the horizon, so light
+        passes behind thin objects (Notes). Default None: every tap is a solid down to
+        infinity, as the depth buffer says. Independent of ``thin_occluder``, which still
+        applies to the distance test.
     power : float, optional
         The visibility is raised to this power (> 0, default 1). XeGTAO ships 2.2
         (``FinalValuePower``), an artistic darkening; it biases the estimate.
@@ -121,7 +131,8 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     Raises
     ------
     ValueError
-        If an argument is out of range or of the wrong type; the message names it.
+        If an argument is out of range or of the wrong type (``thickness`` neither None nor
+        ``"layers"``, or ``"layers"`` on a G-buffer without intervals); the message names it.
 
     Notes
     -----
@@ -143,6 +154,24 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     the taps lie exactly in it. Each tap is snapped to a pixel centre (nearest fetch) and
     its view-space position is reconstructed there. Under perspective the slices are
     uniform around the view axis, not around v, an approximation the paper shares.
+
+    With ``thickness="layers"`` the horizon search runs near to far along each side as
+    without; at a tap with occluder [d, b] along its view ray (b the back of the tapped pixel's
+    interval, nearest pixel, whatever ``fetch``), the points of that segment, seen from p,
+    have horizon cosines falling from the front's to the back's. If the back's cosine exceeds
+    the current horizon's, the current horizon's line crosses the tap's ray behind b: the
+    occluder is separated from the horizon by open space, and the tap is dropped (the rule
+    of the thickness variants of horizon methods, which treat a tap whose sample lies behind
+    the object's back as not occluding). Otherwise the tap raises the horizon to its front as
+    usual. A single maximum horizon per side cannot represent what the layers describe
+    beyond that: an occluder dropped this way is not counted at all (it blocks the arc
+    between its back's and its front's angles, which the estimate reads open, so it errs
+    towards open), and a gap below an occluder that has raised the horizon stays closed
+    (light through a gap and then blocked again is not seen). It equals the depth buffer's
+    GTAO where every interval is ``[d, +inf)``. With ``fetch="bilinear"`` a tap across a
+    silhouette reads a depth interpolated between the two surfaces, in neither's interval:
+    it takes the back of the interval behind it (``docs/screenspace.md``, "Thickness from
+    layers").
 
     To match XeGTAO's defaults set ``falloff_range=0.615, power=2.2, normal_fudge=0.05``
     and use its ``RadiusMultiplier`` 1.457 on the radius; XeGTAO also clamps the output
@@ -168,12 +197,21 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     1.0
     >>> round(float(gtao(gb, radius=0.3, slices=3)[4, 4]), 3)
     0.999
+
+    Solid intervals from every surface to infinity are what the depth buffer assumes:
+
+    >>> import numpy as np
+    >>> from vobscure.layers import SolidIntervals
+    >>> solid = gb.with_intervals(SolidIntervals(gb.depth[None], np.full((1, 8, 8), np.inf)))
+    >>> bool(np.array_equal(gtao(solid, radius=0.3, thickness="layers"), gtao(gb, radius=0.3), equal_nan=True))
+    True
     """
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     options = _check(slices=slices, steps=steps, falloff_range=falloff_range, thin_occluder=thin_occluder,
                      power=power, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
                      offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
+    options["intervals"] = _layers(gbuffer, thickness)
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
     texture = C.noise_texture(noise_size, seed, 3, randomize)
@@ -182,7 +220,8 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
 
 
 def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3,
-                      falloff_range: float = 0.0, thin_occluder: float = 0.0, normal_fudge: float = 0.0,
+                      falloff_range: float = 0.0, thin_occluder: float = 0.0, thickness=None,
+                      normal_fudge: float = 0.0,
                       randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
                       noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
     """View-space bent normals from the GTAO horizons (Jimenez et al. 2016).
@@ -195,7 +234,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
     Parameters
     ----------
-    gbuffer, radius, slices, steps, falloff_range, thin_occluder, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
+    gbuffer, radius, slices, steps, falloff_range, thin_occluder, thickness, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
         As in :func:`gtao` (``power`` does not apply to a direction).
 
     Returns
@@ -224,6 +263,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
     options = _check(slices=slices, steps=steps, falloff_range=falloff_range, thin_occluder=thin_occluder,
                      power=1.0, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
                      offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
+    options["intervals"] = _layers(gbuffer, thickness)
     texture = C.noise_texture(noise_size, seed, 3, randomize)
     gb, depth64, index = C.frame(gbuffer, radius)
     H, W = gb.depth.shape
@@ -254,6 +294,16 @@ def _check(*, slices, steps, falloff_range, thin_occluder, power, normal_fudge, 
     return options
 
 
+def _layers(gbuffer, thickness):
+    """The G-buffer's solid intervals for ``thickness="layers"``, None for None."""
+    if thickness is None:
+        return None
+    if not isinstance(thickness, str):
+        raise ValueError(f"thickness must be None or {C.LAYERS!r} for GTAO (its depth-buffer heuristic for thin "
+                         f"occluders is thin_occluder), got {thickness!r}")
+    return C.solid_intervals(gbuffer, thickness)
+
+
 def _fraction(value, name):
     v = C.check_positive(value, name, allow_zero=True)
     if v > 1.0:
@@ -262,10 +312,12 @@ def _fraction(value, name):
 
 
 def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, power, normal_fudge, fetch,
-                 offscreen, texture, r1_jitter=False, bent=False):
+                 offscreen, texture, r1_jitter=False, bent=False, intervals=None):
     """GTAO of one chunk of pixels (see :func:`gtao`): loops over slices and steps only.
 
-    Returns the (k,) visibility, or with ``bent`` the (k, 3) unnormalized bent normal."""
+    Returns the (k,) visibility, or with ``bent`` the (k, 3) unnormalized bent normal. With
+    ``intervals`` (``thickness="layers"``) a tap whose occluder's back lies above the current
+    horizon does not raise it."""
     k = len(px.index)
     (vx, vy, vz), b1, b2 = C.view_basis(px)
     u_slice, u_step, has_noise = C.slice_noise(px, texture)
@@ -306,6 +358,9 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
                     else:
                         w = (base <= radius).astype(np.float64)    # hard cut at R
                     w = np.where(ok, w, 0.0)
+                    if intervals is not None:
+                        w = _behind_back(w, intervals, px, tap.x, tap.y, tap.d, tap.ray, horizon_cos[side],
+                                         v=(vx, vy, vz), offscreen=offscreen)
                     shc = low[side] + w * (shc - low[side])
                     np.maximum(horizon_cos[side], shc, out=horizon_cos[side])
             # h_2 on the + side (towards t), h_1 = -acos on the - side, clamped to the hemisphere
@@ -336,3 +391,34 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
     if power != 1.0:
         visibility **= power
     return visibility
+
+
+def _behind_back(w, intervals, px, x, y, d, tap_ray, horizon, *, v, offscreen):
+    """The taps' weights ``w`` with 0 where the current horizon passes behind the tap's occluder.
+
+    The occluder at a tap spans its view ray from the tapped depth ``d`` to ``back``, the back
+    of the first solid interval of the tapped pixel (nearest: the pixel containing (x, y))
+    that ends at or behind ``d`` (:func:`vobscure.screenspace._common.interval_back`). Seen
+    from p, the ray's points fall monotonically in the slice as their depth grows, so the
+    current horizon's line crosses the tap's ray behind ``back`` exactly when the back point's
+    horizon cosine exceeds the current one: the occluder then lies wholly above the horizon,
+    with open space between them, and the tap is dropped (weight 0) instead of raising the
+    horizon over that gap. ``back = +inf`` (the solid's end not seen) always raises, as the
+    depth buffer does.
+    """
+    vx, vy, vz = v
+    index, _ = C.nearest_pixel(px.shape, x, y, offscreen=offscreen)
+    back = C.interval_back(intervals, index, d)
+    seen = np.isfinite(back) & (w > 0)
+    if not seen.any():
+        return w
+    back = np.where(seen, back, d)
+    # the back point on the tap's view ray, minus p; its horizon cosine (Jimenez et al. 2016,
+    # Sec. 4: the cos of the angle to v)
+    bx, by = C.ray_to_xy(*tap_ray, back, px.perspective)
+    p = px.p
+    ddx, ddy, ddz = bx - p[:, 0], by - p[:, 1], back - p[:, 2]
+    dist = np.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
+    dist = np.where(dist > 0, dist, 1.0)
+    cos_back = (ddx * vx + ddy * vy + ddz * vz) / dist
+    return np.where(seen & (cos_back > horizon), 0.0, w)

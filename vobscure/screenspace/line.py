@@ -126,6 +126,22 @@ def line_integral(lo, hi, occ_lo, occ_hi, z_s, falloff="constant"):
     return total - occupied, total
 
 
+def _intervals_line_integral(lo, hi, occupied, z_s, falloff):
+    """:func:`line_integral` with several occupied intervals: ``occupied`` yields the
+    (occ_lo, occ_hi) of each, disjoint, in line coordinates. The unoccupied integral is the
+    segment's minus the sum over the intervals of their overlaps with it (each integrated
+    exactly, :func:`falloff_integral`); with one interval the same operations as
+    :func:`line_integral`, so the same values bit for bit."""
+    hi = np.maximum(hi, lo)
+    total = falloff_integral(lo, hi, z_s, falloff=falloff)
+    occ = 0.0
+    for occ_lo, occ_hi in occupied:
+        # Loos & Sloan 2010, Sec. 4.1 and 4.3: each solid interval [front, back] removes its
+        # part inside the segment, [max(front, lo), min(back, hi)]
+        occ = occ + falloff_integral(np.clip(occ_lo, lo, hi), np.clip(occ_hi, lo, hi), z_s, falloff=falloff)
+    return total - occ, total
+
+
 def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "nearest",
             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
@@ -154,10 +170,14 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         Restrict the ball to the half-ball on the normal's side (Sec. 4.4): every chord is
         clipped at the tangent plane. A flat open surface then reads 1.0 instead of 0.5.
         Default False.
-    thickness : float, optional
+    thickness : float or "layers", optional
         Thickness model (Sec. 4.3): a point of the line is occupied only within this world
-        thickness (> 0) behind the depth buffer. Default None: everything behind the depth
-        buffer is solid.
+        thickness (> 0) behind the depth buffer. ``"layers"``: the G-buffer's solid intervals
+        (``gbuffer.intervals``, from ``render_gbuffer(..., layers=K)`` or
+        :meth:`vobscure.GBuffer.with_intervals`) at the tapped pixel: the occupied part of the
+        line is the sum of the overlaps of those intervals with its chord, each integrated
+        exactly with the falloff (Notes). Default None: everything behind the depth buffer is
+        solid.
     falloff : {"constant", "quadratic"}, optional
         The falloff rho: ``"constant"`` (default, the paper's choice), or ``"quadratic"``,
         rho = 1 - r^2 with r the distance from p over R (z_s^2 - z^2 along the line); see
@@ -175,7 +195,9 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         ``"bilinear"``: 1/z (perspective) or z (orthographic) interpolated between the four
         nearest pixel centres, exact on planes; where any tap of a pixel would interpolate
         towards background, all of that pixel's taps are snapped to pixel centres (offsets
-        recomputed there).
+        recomputed there). With ``thickness="layers"`` the intervals are read as
+        ``"nearest"`` reads the depth, whatever ``fetch`` says (interval ends are not
+        interpolated across pixels).
     offscreen : {"clamp", "open"}, optional
         Disk points that project off the image read the nearest border pixel
         (``"clamp"``, default) or empty space (``"open"``).
@@ -193,8 +215,9 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     Raises
     ------
     ValueError
-        For the arguments :func:`vobscure.vo_point` rejects, ``samples`` being a disk
-        pattern here; the message names the argument.
+        For the arguments :func:`vobscure.vo_point` rejects (``thickness="layers"`` on a
+        G-buffer without intervals among them), ``samples`` being a disk pattern here; the
+        message names the argument.
 
     Notes
     -----
@@ -207,6 +230,18 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     the footnote-5 weighting ("each sample will scale its line integral by the integral of
     all the discrete samples in its Voronoi region") in ratio form. Without the normal
     E_i = N_i and the denominator is 1 (sum w_i = 1); with it, a plane reads exactly 1.
+
+    With ``thickness="layers"`` a line reads the solid intervals [front_m, back_m] of the
+    pixel its disk point falls in, and
+
+        U_i = E_i - sum_m int_{[front_m, back_m] within the segment} rho,
+
+    every end mapped to the line coordinate as the depth is. The intervals ``[d, +inf)`` give
+    the single depth buffer's occupancy and ``[d, d + t]`` the thickness model t, up to the
+    order of the floating-point operations. The ends are read at the tapped pixel, not
+    interpolated: across a silhouette the neighbours' intervals belong to different objects,
+    and a blend of their ends would be an interval of neither (``docs/screenspace.md``,
+    "Thickness from layers").
 
     Under a perspective camera the depths are mapped to the sphere's line coordinate with
     the projective warp d_r = (z_p / R) (1 - z_p / d) instead of the paper's linear
@@ -239,25 +274,30 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     pattern = C.as_pattern(samples, 2)
-    thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness,
-                               noise_size=noise_size)
+    intervals = C.solid_intervals(gbuffer, thickness)
+    thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff,
+                               thickness=None if intervals is not None else thickness, noise_size=noise_size)
     texture = C.noise_texture(noise_size, seed, 2, randomize)
     prepared = C.frame(gbuffer, radius)
     gb, depth64, index = prepared
     options = dict(radius=radius, normal_clamp=normal_clamp, thickness=thickness, falloff=falloff,
                    offscreen=offscreen)
-    if fetch == "bilinear":
+    if fetch == "bilinear" and intervals is None:
         kernel = partial(_line_kernel, pattern=pattern, texture=texture, **options)
         return C.run_chunks(gb, radius, kernel, C.out_dtype(gbuffer), prepared=prepared)
     H, W = gb.depth.shape
     out = np.full(H * W, np.nan, dtype=C.out_dtype(gbuffer))
     if not len(index):
         return out.reshape(H, W)
-    # the largest projected radius decides how wide a border the taps can reach
-    z_min = float(np.min(depth64[index]))
-    # (the larger of its x and y extents: fx != fy for non-square pixels)
-    padded = C.padded_depth(depth64, (H, W), radius * float(np.max(gb.camera.pixels_per_unit_xy(z_min))),
-                            offscreen)
+    if intervals is None:
+        # the largest projected radius decides how wide a border the taps can reach
+        z_min = float(np.min(depth64[index]))
+        # (the larger of its x and y extents: fx != fy for non-square pixels)
+        padded = C.padded_depth(depth64, (H, W), radius * float(np.max(gb.camera.pixels_per_unit_xy(z_min))),
+                                offscreen)
+    else:
+        padded = None       # the layers are gathered from the clamped tap index (C.tap_pixel)
+        options["intervals"] = intervals
     antipodal = _exactly_antipodal(pattern)
     for chunk, v in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
@@ -287,7 +327,7 @@ def _exactly_antipodal(pattern) -> bool:
 
 
 def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded,
-                  antipodal=False):
+                  antipodal=False, intervals=None):
     """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
@@ -303,6 +343,10 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     denominator, the half-ball's share the lines see, is sum k_s (hi_s + z_s); for an
     exactly antipodal pattern (``antipodal``) the hi_s of a pair are opposite and cancel,
     so it is the constant sum k_s z_s and is not accumulated per pixel.
+
+    With ``intervals`` (``thickness="layers"``) each line reads the solid intervals of the
+    tapped pixel instead of its depth: the occupied part of its segment is the sum of the
+    intervals' overlaps with it (:func:`_intervals_line_integral`).
     """
     k = len(px.index)
     r_x, r_y = px.radius_px_x, px.radius_px      # the projected radius along x and y (pixels)
@@ -310,7 +354,9 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
     base = C.padded_base(px, padded) if padded is not None else None
     dj, e, t, d = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
     num = np.zeros(k)
-    simple = falloff == "constant" and thickness is None
+    simple = falloff == "constant" and thickness is None and intervals is None
+    if intervals is not None:
+        fronts, backs = C.interval_slots(intervals)
     # unclamped (constant falloff), or clamped with an exactly antipodal pattern, the
     # denominator is the scalar ``const`` (docstring)
     den = np.zeros(k) if (not simple or (normal_clamp and not antipodal)) else None
@@ -321,6 +367,17 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
         gx, gy = gx / r_x, gy / r_y
     if px.perspective:
         a, b = z / radius, z * z / radius          # warp: d_r = a - b / d (C.warp)
+    if intervals is not None:
+        # the interval ends to line coordinates by the operations the depth d goes through
+        # below, so the intervals [d, +inf) read exactly what d does
+        if px.perspective:
+            def warp(depth):
+                return a - b / depth
+        else:
+            inv_radius = 1.0 / radius
+
+            def warp(depth):
+                return (depth - z) * inv_radius
     raw = np.empty(k) if thickness is not None else None
     const = 0.0     # the scalar parts of num and den
     wsum = 0.0
@@ -336,17 +393,22 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
             np.rint(dj, out=dj)
             np.multiply(r_y, y, out=e)
             np.rint(e, out=e)
-            C.nearest_taps(px, dj, e, offscreen=offscreen, padded=padded, base=base, out=d, scratch=t)
-            if raw is not None:
-                raw[:] = d
-            # depth -> line coordinate d_r of the unit sphere, in place in d (C.warp; the
-            # paper's linear (d - z_p) / R of Sec. 4.1 under an orthographic camera)
-            if px.perspective:
-                np.divide(b, d, out=d)
-                np.subtract(a, d, out=d)
+            if intervals is not None:
+                # the tapped pixel, whose intervals are read below (none: empty space)
+                tap, empty = C.tap_pixel(px, dj, e, offscreen=offscreen)
+                empty = empty if empty.any() else None
             else:
-                d -= z
-                d *= 1.0 / radius
+                C.nearest_taps(px, dj, e, offscreen=offscreen, padded=padded, base=base, out=d, scratch=t)
+                if raw is not None:
+                    raw[:] = d
+                # depth -> line coordinate d_r of the unit sphere, in place in d (C.warp; the
+                # paper's linear (d - z_p) / R of Sec. 4.1 under an orthographic camera)
+                if px.perspective:
+                    np.divide(b, d, out=d)
+                    np.subtract(a, d, out=d)
+                else:
+                    d -= z
+                    d *= 1.0 / radius
             if normal_clamp:
                 # Sec. 4.4: the chord ends where the tangent plane crosses it, in t
                 np.multiply(gx, dj, out=t)
@@ -371,15 +433,26 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 const += k_s * z_s
                 wsum += w
                 continue
-            # occupied from the surface to the thickness (Sec. 4.3), or to infinity
-            if thickness is None:
-                occ_hi = np.inf
-            elif px.perspective:
-                occ_hi = a - b / (raw + thickness)
-            else:
-                occ_hi = (raw + thickness - z) / radius
             hi = t if normal_clamp else z_s
-            unocc, total = line_integral(-z_s, hi, d, occ_hi, z_s, falloff)
+            if intervals is not None:
+                # the solid intervals of the tapped pixel, each end warped to the line
+                # coordinate as the depth is (none off the image with offscreen="open")
+                ends = []
+                for m in range(intervals.count):
+                    f_m, b_m = fronts[m].take(tap), backs[m].take(tap)
+                    if empty is not None:
+                        f_m, b_m = np.where(empty, np.inf, f_m), np.where(empty, np.inf, b_m)
+                    ends.append((warp(f_m), warp(b_m)))
+                unocc, total = _intervals_line_integral(-z_s, hi, ends, z_s, falloff)
+            else:
+                # occupied from the surface to the thickness (Sec. 4.3), or to infinity
+                if thickness is None:
+                    occ_hi = np.inf
+                elif px.perspective:
+                    occ_hi = a - b / (raw + thickness)
+                else:
+                    occ_hi = (raw + thickness - z) / radius
+                unocc, total = line_integral(-z_s, hi, d, occ_hi, z_s, falloff)
             # footnote 5: the chord's weight w over its full integral N = int_{-z_s}^{z_s} rho
             scale = w / float(falloff_integral(-z_s, z_s, z_s, falloff=falloff))
             num += scale * unocc

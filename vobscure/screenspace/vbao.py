@@ -93,9 +93,11 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
         allowed: a depth buffer's infinitely thick surfaces, the GTAO limit) by which the
         tapped point is moved away from the camera along p's view vector (Bevy, SSRT3,
         Blender's near thickness); None (default): ``THICKNESS_FRACTION`` (0.5) x ``radius``.
-        ``"layers"``: the back of the solid interval of the tapped pixel that contains or
-        follows the tapped depth (:class:`vobscure.layers.SolidIntervals`), on the tapped
-        position's own ray: the true thickness.
+        ``"layers"``: the back of the solid interval of the tapped pixel (the pixel the tap
+        falls in, whatever ``fetch``) that contains or follows the tapped depth
+        (:class:`vobscure.layers.SolidIntervals`), on the tapped position's own ray: the true
+        thickness (+inf: an unseen end; none ending behind the tapped depth, as a bilinear
+        tap across a silhouette can read: a surface of no thickness).
     thickness_scale : {"constant", "linear"}, optional
         ``"linear"``: a numeric thickness is per unit of the tap's view depth (thickness x z),
         SSRT3's ``_LinearThickness`` (which multiplies its thickness by 100 z / far:
@@ -188,11 +190,8 @@ def _check(gbuffer, *, radius, slices, steps, thickness, thickness_scale, thickn
     """Validate :func:`vbao`'s arguments (ValueError naming the argument); the kernel's options."""
     layers = isinstance(thickness, str)
     if layers:
-        if thickness != "layers":
-            raise ValueError(f"thickness must be a number >= 0, None or 'layers', got {thickness!r}")
-        if gbuffer.intervals is None:
-            raise ValueError("thickness='layers' needs a G-buffer with solid intervals "
-                             "(render_gbuffer(..., layers=K) or GBuffer.with_intervals); this one has none")
+        # ValueError naming thickness for another string or a G-buffer without intervals
+        C.solid_intervals(gbuffer, thickness)
         value = np.inf
     elif thickness is None:
         value = THICKNESS_FRACTION * radius
@@ -338,18 +337,12 @@ class _Weights:
         return sl.cos_g * p + sl.sin_g * q + np.where(bit, 2.0 * R, 0.0)
 
 
-def _layer_back(px, tap, intervals):
-    """The back depth (k,) of the solid interval at the tapped pixel that contains or
-    follows the tapped depth (+inf when none: an unseen end)."""
-    H, W = px.shape
-    j = np.clip(np.floor(tap.x), 0, W - 1).astype(np.intp)
-    i = np.clip(np.floor(tap.y), 0, H - 1).astype(np.intp)
-    _, back = intervals.at(i * W + j)
-    back = back.astype(np.float64, copy=False)
-    m = np.argmax(back >= tap.d, axis=0)
-    z_b = back[m, np.arange(len(m))]
-    # no interval ends behind the tap (never with intervals that hold the first surface)
-    return np.where((back >= tap.d).any(axis=0), z_b, np.inf)
+def _layer_back(px, tap, intervals, offscreen):
+    """The back depth (k,) of the solid interval of the tapped pixel (the pixel the tap falls
+    in) that contains or follows the tapped depth (:func:`vobscure.screenspace._common.interval_back`:
+    +inf for an unseen end, the tapped depth itself when no interval ends behind it)."""
+    index, _ = C.nearest_pixel(px.shape, tap.x, tap.y, offscreen=offscreen)
+    return C.interval_back(intervals, index, tap.d)
 
 
 #: Abramowitz & Stegun 1964, Eq. 4.4.46: arccos x = sqrt(1 - x) (a_0 + a_1 x + ... + a_7 x^7)
@@ -382,7 +375,7 @@ def _acos(c):
     return np.where(negative, np.pi - r, r)
 
 
-def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals):
+def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals, offscreen):
     """The angle from v (k,) of the tap's back point (``dv``: the tap's offset from p along v)."""
     if not layers:
         if np.isinf(thickness):
@@ -395,7 +388,7 @@ def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals):
         return _acos((dv - T) / np.sqrt(np.maximum(length2, 1e-300)))
     vx, vy, vz = v
     p = px.p
-    z_b = _layer_back(px, tap, intervals)
+    z_b = _layer_back(px, tap, intervals, offscreen)
     finite = np.isfinite(z_b)
     z = np.where(finite, z_b, tap.d)
     srx, sry = tap.ray
@@ -444,7 +437,7 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
                     dv = ddx * vx + ddy * vy + ddz * vz
                     alpha_f = _acos(dv / tap.dist)
                     alpha_b = _back_angle(px, tap, v, dv, thickness=thickness, linear=linear, layers=layers,
-                                          intervals=intervals)
+                                          intervals=intervals, offscreen=offscreen)
                     np.maximum(alpha_b, alpha_f, out=alpha_b)
                     if thickness_far > 0:
                         # Blender: the back horizon at least thickness_far past the front one

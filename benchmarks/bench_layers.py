@@ -1,0 +1,92 @@
+"""The layered G-buffer: render time and peak memory per layer of depth peeling, as ratios.
+
+The machine this runs on is shared and noisy, so every time is a *ratio* of two timings taken
+in the same run (best of ``--repeats`` rounds, the calls interleaved round by round,
+``_bench.interleaved``); absolute times are context only. Memory is exact: tracemalloc's peak
+of one call (``_bench.peak_bytes``), which counts NumPy's arrays.
+
+What is measured
+----------------
+``vo.render_gbuffer(scene, camera, layers=K)`` for K = 1, 2, 4, 8 on the Cornell box and the
+atrium (``vo.scenes.atrium()``: 41k triangles, alpha-tested leaves and open banners), each at
+its suggested camera, 512 x 512 (128 x 128 with ``--quick``), on every usable core:
+
+- **time**: K layers / one layer (the G-buffer of today), and that ratio per extra layer;
+- **memory**: the peak of one call, (peak(K) - peak(1)) / ((K - 1) pixels): bytes per pixel
+  per layer beyond one (goal <= 24), with what the result holds (the surfaces,
+  ``PeeledLayers.nbytes``, and the intervals' float64 slots) beside it;
+- **coverage**: the interval slots M, and the fraction of covered pixels whose last interval
+  is still open after K layers (its end unseen: the ray crossed at least K surfaces).
+
+Run from the repository root::
+
+    python benchmarks/bench_layers.py            # about a minute
+    python benchmarks/bench_layers.py --quick    # a few seconds (smoke test)
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+import _bench
+import vobscure as vo
+
+LAYERS = (1, 2, 4, 8)
+#: Goal: peak memory of the layered G-buffer per pixel per layer beyond one.
+MEMORY_GOAL = 24.0
+
+
+class Report(_bench.Report):
+    columns = (f"{'scene':<12} {'K':>2} {'seconds':>9} {'x K=1':>7} {'cores':>6} {'peak B/px':>10} "
+               f"{'B/px/extra':>11} {'held B/px':>10} {'M':>3} {'open end':>9}")
+    summary_title = "Summary (K layers against one, same run)"
+
+    def row(self, name, K, t, ratio, peak, extra, held, M, unseen):
+        extra_s = "" if extra is None else f"{extra:11.1f}"
+        print(f"  {name:<12} {K:>2} {t.seconds:9.4f} {ratio:7.2f} {t.cores:6.2f} {peak:10.1f} "
+              f"{extra_s:>11} {held:10.1f} {M:>3} {unseen:9.1%}")
+
+
+def main(argv=None) -> int:
+    parser = _bench.parser(__doc__, quick="128 x 128 (a few seconds)", statistic="best")
+    args = _bench.parse(parser, argv)
+    size = (128, 128) if args.quick else (512, 512)
+
+    def body(report):
+        _bench.machine_facts("render_gbuffer on every usable core")
+        for name in ("cornell_box", "atrium"):
+            scene = vo.scenes.get(name)
+            cam = scene.camera(size)
+            scene.tracer  # noqa: B018 - build the Embree scene outside the timings
+            pixels = cam.width * cam.height
+            times = _bench.interleaved({K: (lambda K=K: vo.render_gbuffer(scene, cam, layers=K)) for K in LAYERS},
+                                       args.repeats)
+            peaks = {K: _bench.peak_bytes(lambda K=K: vo.render_gbuffer(scene, cam, layers=K)) for K in LAYERS}
+            report.header(f"{name}: {cam.width} x {cam.height}, {len(scene.triangles)} triangles "
+                          f"({args.repeats} rounds, best)")
+            for K in LAYERS:
+                gb = times[K].result
+                ratio = times[K].seconds / times[1].seconds
+                if K == 1:
+                    held, M, unseen, extra = 0.0, 0, 0.0, None
+                else:
+                    s = gb.intervals
+                    held = (s.layers.nbytes + s.front.nbytes + s.back.nbytes) / pixels
+                    M = s.count
+                    covered = gb.valid
+                    last = np.where(np.isfinite(s.front), np.arange(M)[:, None, None], -1).max(axis=0)
+                    open_end = np.take_along_axis(s.back, np.maximum(last, 0)[None], axis=0)[0]
+                    unseen = float(np.mean(np.isinf(open_end[covered]) & (last[covered] >= 0)))
+                    extra = (peaks[K] - peaks[1]) / ((K - 1) * pixels)
+                    report.note(f"{name}: time K={K} / K=1 (per extra layer {(ratio - 1) / (K - 1):.2f})", ratio)
+                    report.goal(f"{name}: peak bytes per pixel per extra layer, K={K}", extra, MEMORY_GOAL,
+                                at_least=False, unit=" B")
+                report.row(name, K, times[K], ratio, peaks[K] / pixels, extra, held, M, unseen)
+
+    return _bench.run(body, Report())
+
+
+if __name__ == "__main__":
+    sys.exit(main())
