@@ -14,8 +14,8 @@ scene's extent; ``--radius``). The configurations are registry configurations
 (:class:`vobscure.methods.Config`: a method and a sample count, each method's default
 fetch) -- ``point:12``, ``point:33``, ``line:5``, ``line:9``, ``area:1`` -- each with
 ``normal_clamp`` False and True, run through ``Config.run`` (``randomize`` on, every other
-argument at its default); then the engines' baselines without the clamp: ``gtao:3`` and
-``sao:12`` (goal: within 2x of the floor of their own reads) and ``alchemy:12`` (reported,
+argument at its default); then the engines' baselines without the clamp: ``gtao:3``,
+``vbao:3`` and ``sao:12`` (goal: within 2x of the floor of their own reads) and ``alchemy:12`` (reported,
 no goal). Every configuration runs once on a 16^2 render before anything
 is measured (sample patterns and caches built), and each timed call has one more untimed
 warm-up call (:func:`vobscure.experiments.common.time_calls`).
@@ -113,8 +113,9 @@ RADIUS = 0.3
 #: normal_clamp False and True
 CONFIGS = (Config("point", 12), Config("point", 33), Config("line", 5), Config("line", 9), Config("area", 1))
 #: the engines' baselines, timed without the normal clamp (they estimate AO, which
-#: has no clamp): GTAO "high" (3 slices x 3 steps a side) and SAO with 12 taps
-BASELINES = (Config("gtao", 3), Config("sao", 12))
+#: has no clamp): GTAO "high" (3 slices x 3 steps a side), VBAO on the same taps (32 sectors,
+#: a bitmask per slice) and SAO with 12 taps
+BASELINES = (Config("gtao", 3), Config("vbao", 3), Config("sao", 12))
 #: baselines timed beside them without a goal: Alchemy AO with 12 taps shares SAO's code
 #: path (a disk of nearest taps, a sum of a term of v = Q - C)
 BASELINE_NOTES = (Config("alchemy", 12),)

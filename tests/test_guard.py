@@ -70,7 +70,7 @@ def test_orthographic_inner_pixels_agree_to_rounding(crease):
                                atol=ORTHO_DEPTH_ATOL)
 
 
-@pytest.mark.parametrize("name", ["vo_line", "vo_point", "gtao", "hbao", "sao", "vo_area"])
+@pytest.mark.parametrize("name", ["vo_line", "vo_point", "gtao", "vbao", "hbao", "sao", "vo_area"])
 def test_estimators_return_the_inner_frame(pair, name):
     plain, guarded = pair
     estimator = getattr(vo, name)

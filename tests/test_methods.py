@@ -23,7 +23,7 @@ def gb():
 
 def test_names_and_unknown_name_lists_them():
     vegetation = ("hegeman", "hegeman_ellipsoid", "hegeman_multishell", "reeves_blau", "poisson")
-    baselines = ("gtao", "hbao", "alchemy", "sao")
+    baselines = ("gtao", "vbao", "vbao_uniform", "hbao", "alchemy", "sao")
     object_space = ("bunnell", "ren")
     assert methods.names() == ("point", "line", "area", "reference") + baselines + vegetation + object_space
     assert methods.names(include_references=False) == ("point", "line", "area") + baselines + vegetation + \

@@ -15,8 +15,8 @@ from .metrics import Decomposition, ErrorReport, Flicker, decompose, error, flic
 from .raytrace import Tracer
 from .render import render_gbuffer
 from .scenes import Scene
-from .screenspace import (alchemy, bilateral_blur, combine_radii, gtao, gtao_bent_normals, hbao, sao, vo_area,
-                          vo_line, vo_point, vo_reference)
+from .screenspace import (alchemy, bilateral_blur, combine_radii, gtao, gtao_bent_normals, hbao, sao, vbao,
+                          vo_area, vo_line, vo_point, vo_reference)
 from . import io, methods, objectspace, patterns, references, shading, trees
 
 
@@ -68,6 +68,7 @@ __all__ = [
     "sao",
     "scenes",
     "shading",
+    "vbao",
     "volumetric_obscurance",
     "patterns",
     "trees",

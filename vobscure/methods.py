@@ -24,7 +24,7 @@ Examples
 --------
 >>> from vobscure import methods
 >>> methods.names()
-('point', 'line', 'area', 'reference', 'gtao', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson', 'bunnell', 'ren')
+('point', 'line', 'area', 'reference', 'gtao', 'vbao', 'vbao_uniform', 'hbao', 'alchemy', 'sao', 'hegeman', 'hegeman_ellipsoid', 'hegeman_multishell', 'reeves_blau', 'poisson', 'bunnell', 'ren')
 >>> m = methods.get("point")
 >>> m.taps(33), m.texels(33), m.quantity(normal_clamp=True), m.reference(normal_clamp=True)
 (32, 128, 'half-ball VO', 'volumetric')
@@ -44,7 +44,7 @@ import numpy as np
 from .estimate import DEFAULT_GROUPS, Estimate
 from .objectspace import bunnell_gbuffer, sphere_set_gbuffer
 from .references import QUANTITIES, Quantity, lookup
-from .screenspace import alchemy, gtao, hbao, point_taps, sao, vo_area, vo_line, vo_point, vo_reference
+from .screenspace import alchemy, gtao, hbao, point_taps, sao, vbao, vo_area, vo_line, vo_point, vo_reference
 from .screenspace import crop_guard, inner_shape
 from .trees.pixels import hegeman_gbuffer, poisson_gbuffer, reeves_blau_gbuffer
 
@@ -358,7 +358,7 @@ def parse(spec) -> tuple[Config, ...]:
     >>> parse("ray:3")
     Traceback (most recent call last):
     ...
-    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson, bunnell, ren
+    ValueError: --methods entry 'ray:3': unknown method 'ray'; expected one of point, line, area, reference, gtao, vbao, vbao_uniform, hbao, alchemy, sao, hegeman, hegeman_ellipsoid, hegeman_multishell, reeves_blau, poisson, bunnell, ren
     """
     items = [s.strip() for s in spec.split(",") if s.strip()] if isinstance(spec, str) else list(spec)
     if not items:
@@ -429,8 +429,15 @@ def _hbao_taps(n: int) -> int:
     return int(n) * HBAO_STEPS
 
 
+def _vbao_taps(n: int) -> int:
+    """VBAO with n slices of 3 steps a side: two taps a step, as GTAO."""
+    return 2 * int(n) * VBAO_STEPS
+
+
 #: Steps per side of the registered ``gtao`` (XeGTAO's "high": 3 x 3) and per direction of ``hbao``.
 GTAO_STEPS = 3
+#: Steps per side of the registered ``vbao`` and ``vbao_uniform`` (GTAO's, so that they cost the same taps).
+VBAO_STEPS = GTAO_STEPS
 HBAO_STEPS = 4
 
 #: GTAO as the registry runs it, XeGTAO's "high" steps. Its ``thickness`` takes only the
@@ -443,6 +450,16 @@ _gtao.__signature__ = inspect.signature(_gtao).replace(
 register(Method("gtao", _gtao, default_samples=3, fetch="bilinear", samples="slices",
                 taps=_gtao_taps, quantity=_cosine_ao,
                 summary="GTAO (Jimenez et al. 2016): horizons per slice, cosine AO; SAMPLES = slices of 3 steps "
+                        "a side"))
+# Therrien et al. 2023 on GTAO's slices and taps: the cosine weighting scored against cosine AO,
+# the uniform one (the solid angle of each sector) against uniform AO
+register(Method("vbao", partial(vbao, steps=VBAO_STEPS), default_samples=3, fetch="bilinear", samples="slices",
+                taps=_vbao_taps, quantity=_cosine_ao,
+                summary="VBAO (Therrien et al. 2023): a bitmask of occluded sectors per slice, thickness 0.5 R by "
+                        "default, cosine AO; SAMPLES = slices of 3 steps a side"))
+register(Method("vbao_uniform", partial(vbao, steps=VBAO_STEPS, weighting="uniform"), default_samples=3,
+                fetch="bilinear", samples="slices", taps=_vbao_taps, quantity=_uniform_ao,
+                summary="VBAO with each sector weighed by its solid angle: uniform AO; SAMPLES = slices of 3 steps "
                         "a side"))
 register(Method("hbao", partial(hbao, steps=HBAO_STEPS), default_samples=8, fetch="nearest", fetch_parameter=None,
                 samples="directions", taps=_hbao_taps, quantity=_uniform_ao,

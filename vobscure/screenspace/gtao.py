@@ -18,7 +18,6 @@ from functools import partial
 
 import numpy as np
 
-from ..camera.kernel import ray_to_xy, shift_ray
 from . import _common as C
 
 __all__ = ["gtao", "gtao_bent_normals", "PRESETS"]
@@ -322,84 +321,31 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
     ``intervals`` (``thickness="layers"``) a tap whose occluder's back lies above the current
     horizon does not raise it."""
     k = len(px.index)
-    p = px.p
-    n = px.n
-    px_, py_, pz_ = p[:, 0], p[:, 1], p[:, 2]
-    nx, ny, nz = n[:, 0], n[:, 1], n[:, 2]
-    if px.perspective:
-        # v: the unit vector from p to the camera (Sec. 4, "view vector")
-        inv = 1.0 / np.sqrt(px_ * px_ + py_ * py_ + pz_ * pz_)
-        vx, vy, vz = -px_ * inv, -py_ * inv, -pz_ * inv
-    else:
-        vx, vy, vz = np.zeros(k), np.zeros(k), -np.ones(k)
-    rx, ry = px.ray
-    # a frame (b1, b2) orthogonal to v: b1 the view x axis made orthogonal to v, b2 = b1 x v
-    # (for v = (0, 0, -1): b1 = x, b2 = y)
-    b1x, b1y, b1z = 1.0 - vx * vx, -vx * vy, -vx * vz
-    b1l = np.sqrt(b1x * b1x + b1y * b1y + b1z * b1z)
-    b1x, b1y, b1z = b1x / b1l, b1y / b1l, b1z / b1l
-    b2x, b2y, b2z = b1y * vz - b1z * vy, b1z * vx - b1x * vz, b1x * vy - b1y * vx
-    noise = C.noise_at(px, texture)
-    if noise is None:
-        u_slice = u_step = np.full(k, 0.5)
-    else:
-        u_slice = (np.arctan2(noise[:, 1], noise[:, 0]) / (2.0 * np.pi)) % 1.0
-        u_step = np.clip(0.5 * (noise[:, 2] + 1.0), 0.0, 1.0 - 1e-12)
-    r_x, r_y = px.radius_px_x, px.radius_px
+    (vx, vy, vz), b1, b2 = C.view_basis(px)
+    u_slice, u_step, has_noise = C.slice_noise(px, texture)
     visibility = np.zeros(k)
     bent_normal = np.zeros((k, 3)) if bent else None
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
-            # Algorithm 1: phi = pi (slice + noise) / slices; the slice direction t is
-            # cos phi b1 + sin phi b2, orthogonal to v (uniform around v, not the view axis)
+            # Algorithm 1: phi = pi (slice + noise) / slices (uniform around v, not the view axis)
             phi = np.pi * (s + u_slice) / slices
-            cphi, sphi = np.cos(phi), np.sin(phi)
-            tx, ty, tz = cphi * b1x + sphi * b2x, cphi * b1y + sphi * b2y, cphi * b1z + sphi * b2z
-            # the slice's axis (normal of the plane) and the normal projected onto the plane
-            ax, ay, az = ty * vz - tz * vy, tz * vx - tx * vz, tx * vy - ty * vx
-            na = nx * ax + ny * ay + nz * az
-            pnx, pny, pnz = nx - na * ax, ny - na * ay, nz - na * az
-            pn_len = np.sqrt(pnx * pnx + pny * pny + pnz * pnz)
-            # gamma: the projected normal's angle from v, positive towards t (Sec. 4)
-            gamma = np.arctan2(pnx * tx + pny * ty + pnz * tz, pnx * vx + pny * vy + pnz * vz)
-            sin_g, cos_g = np.sin(gamma), np.cos(gamma)
+            sl = C.horizon_slice(px, phi, (vx, vy, vz), b1, b2, min_px=PIXEL_TOO_CLOSE)
+            tx, ty, tz = sl.t
+            gamma, sin_g, cos_g, pn_len = sl.gamma, sl.sin_g, sl.cos_g, sl.pn_len
             # horizons start at the tangent plane: cos(gamma +- pi/2) = -+ sin(gamma)
             low = (-sin_g, sin_g)
             horizon_cos = [low[0].copy(), low[1].copy()]
-            # the slice's screen direction: the projection of p + R t to first order, in
-            # pixels (x right, rows up), honouring fx and fy; the eye, p and every point of
-            # that screen line lie in the slice plane
-            if px.perspective:
-                ox, oy = r_x * (tx - rx * tz), r_y * (ty - ry * tz)
-            else:
-                ox, oy = r_x * tx, r_y * ty
-            length_px = np.sqrt(ox * ox + oy * oy)
-            min_s = PIXEL_TOO_CLOSE / length_px
             for j in range(steps):
                 # the step jitter: the pixel's own, or with r1_jitter XeGTAO's, advanced along
                 # the R1 sequence by (slice + step * steps) golden-ratio steps (XeGTAO.hlsli,
                 # XeGTAO_MainPass); then XeGTAO's distribution ((j + u) / steps) ** 2 plus the
                 # minimum offset
-                u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and noise is not None) else u_step
-                t = ((j + u) / steps) ** SAMPLE_DISTRIBUTION_POWER + min_s
+                u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and has_noise) else u_step
+                t = ((j + u) / steps) ** SAMPLE_DISTRIBUTION_POWER + sl.min_s
                 for side, sign in ((0, 1.0), (1, -1.0)):
-                    dj = sign * t * ox
-                    de = sign * t * oy                   # rows up
-                    if fetch == "nearest":
-                        # the tap snapped to the centre of the pixel it falls in
-                        dj, de = np.rint(dj), np.rint(de)
-                    x, y = px.col + 0.5 + dj, px.row + 0.5 - de
-                    d = C.fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen,
-                                      reciprocal=px.perspective)
-                    ok = np.isfinite(d) & (d > 0) & ((dj != 0) | (de != 0))
-                    d = np.where(ok, d, pz_)
-                    # the tap's view-space position (the pixel's ray shifted to the tap), minus p
-                    tap_ray = shift_ray(rx, ry, dj, -de, px.fx, px.fy)
-                    sx, sy = ray_to_xy(*tap_ray, d, px.perspective)
-                    ddx, ddy, ddz = sx - px_, sy - py_, d - pz_
-                    dist = np.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
-                    ok &= dist > 0
-                    dist = np.where(ok, dist, 1.0)
+                    tap = C.horizon_tap(px, sl, sign * t, fetch=fetch, offscreen=offscreen)
+                    ok, dist = tap.ok, tap.dist
+                    ddx, ddy, ddz = tap.delta
                     # Sec. 4: the horizon is the largest cos of the angle to v
                     shc = (ddx * vx + ddy * vy + ddz * vz) / dist
                     # XeGTAO's thin-occluder compensation stretches the depth offset
@@ -415,7 +361,7 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
                         w = (base <= radius).astype(np.float64)    # hard cut at R
                     w = np.where(ok, w, 0.0)
                     if intervals is not None:
-                        w = _behind_back(w, intervals, px, x, y, d, tap_ray, horizon_cos[side],
+                        w = _behind_back(w, intervals, px, tap.x, tap.y, tap.d, tap.ray, horizon_cos[side],
                                          v=(vx, vy, vz), offscreen=offscreen)
                     shc = low[side] + w * (shc - low[side])
                     np.maximum(horizon_cos[side], shc, out=horizon_cos[side])
@@ -471,7 +417,7 @@ def _behind_back(w, intervals, px, x, y, d, tap_ray, horizon, *, v, offscreen):
     back = np.where(seen, back, d)
     # the back point on the tap's view ray, minus p; its horizon cosine (Jimenez et al. 2016,
     # Sec. 4: the cos of the angle to v)
-    bx, by = ray_to_xy(*tap_ray, back, px.perspective)
+    bx, by = C.ray_to_xy(*tap_ray, back, px.perspective)
     p = px.p
     ddx, ddy, ddz = bx - p[:, 0], by - p[:, 1], back - p[:, 2]
     dist = np.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
