@@ -180,3 +180,69 @@ def test_stratified_square_puts_one_point_per_cell(n, grid):
     assert len(cells) == n
     if a * b == n:
         assert cells == {(i, j) for i in range(a) for j in range(b)}
+
+
+def _plane_view(size=(48, 32), ortho=False):
+    """A slab's top (y = 0 plane) with a unit cube standing on it, seen from above at an angle."""
+    import trimesh
+    slab = trimesh.creation.box(extents=(8.0, 1.0, 8.0))
+    slab.apply_translation((0.0, -0.5, 0.0))
+    cube = trimesh.creation.box(extents=(0.5, 0.5, 0.5))
+    cube.apply_translation((0.0, 0.25, 0.0))
+    scene = vo.scenes.Scene({"slab": slab, "cube": cube})
+    view = dict(size=size, ortho_height=3.0) if ortho else dict(size=size, fov_y=50.0)
+    cam = vo.Camera.look_at((0.0, 2.5, 2.5), (0.0, 0.0, 0.0), **view)
+    return vo.render_gbuffer(scene, cam)
+
+
+@pytest.mark.parametrize("case", range(len(CASES)))
+@pytest.mark.parametrize("ortho", [False, True])
+def test_plane_shortcut_changes_nothing(case, ortho):
+    """Pixels whose rays all read their own plane take 1/2 (1 clamped) without integrating:
+    the value and stderr the integration gives them, bit for bit (every group reads exactly
+    that there, the control variate cancelling each segment), for every option."""
+    from vobscure.screenspace import _segment as S
+    from vobscure.screenspace import _common as Cm
+    gb = _plane_view(ortho=ortho)
+    args = dict(radius=0.3, normal_clamp=False, thickness=None, falloff="constant", fetch="bilinear",
+                offscreen="clamp", groups=DEFAULT_GROUPS, progress=False)
+    args.update(CASES[case])
+    px = Cm.prepare(gb, args["radius"])
+    flat = S.on_one_plane(px, args["radius"], S.PlaneTables(S.plane_labels(gb)))
+    assert 0.2 < flat.mean() < 0.9          # the shortcut is exercised, and not everywhere
+    on = P._reference(gb, samples=SEGMENTS, seed=2, along="segment", shortcut=True, **args)
+    off = P._reference(gb, samples=SEGMENTS, seed=2, along="segment", shortcut=False, **args)
+    np.testing.assert_array_equal(on.value, off.value)
+    np.testing.assert_array_equal(on.stderr, off.stderr)
+
+
+def test_on_one_plane_by_hand():
+    """The slab's pixels far (in pixels) from anything else and from the image's edge qualify; those
+    whose ball reaches the cube or whose footprint reaches the image's edge do not; a G-buffer from arrays
+    (planes known only to the depth's precision) has no labels."""
+    from vobscure.screenspace import _segment as S
+    from vobscure.screenspace import _common as Cm
+    gb = _plane_view(size=(60, 40))
+    labels = S.plane_labels(gb)
+    slab_top = labels[gb.world_normal[..., 1] > 0.999]
+    assert len(np.unique(slab_top)) == 2      # the slab's top and the cube's top: two planes
+    R = 0.2
+    px = Cm.prepare(gb, R)
+    flat = np.zeros(gb.depth.size, dtype=bool)
+    flat[px.index] = S.on_one_plane(px, R, S.PlaneTables(labels))
+    flat = flat.reshape(gb.shape)
+    # world distance of each pixel's point from the cube's footprint [-0.25, 0.25]^2 on y = 0
+    p = gb.world_position
+    gap = np.maximum(np.abs(p[..., 0]), np.abs(p[..., 2])) - 0.25
+    on_slab = labels == labels[gb.shape[0] - 1, gb.shape[1] // 2]
+    assert not flat[on_slab & (gap < R)].any()                  # the ball reaches the cube
+    reach = np.ceil(R * gb.camera.fy / np.where(gb.valid, gb.depth, np.inf)).astype(int) + 2
+    i, j = np.indices(gb.shape)
+    edge = np.minimum(np.minimum(i, gb.shape[0] - 1 - i), np.minimum(j, gb.shape[1] - 1 - j))
+    assert not flat[edge < reach // 2].any()                    # a footprint past the edge
+    # in the image, at more than twice the footprint's radius from any pixel not on the slab
+    from scipy import ndimage
+    away = ndimage.distance_transform_edt(on_slab) > 2 * reach
+    assert flat[on_slab & away & (edge > 2 * reach)].all()
+    assert (on_slab & away & (edge > 2 * reach)).sum() > 50
+    assert S.plane_labels(vo.GBuffer.from_arrays(gb.depth, camera=gb.camera)) is None

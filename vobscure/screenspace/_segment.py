@@ -175,3 +175,91 @@ def ray_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, fetch, off
         # control variate: scale * E[plane_sum] = mass / 2 exactly
         v = 0.5 - scale * (occ_sum - plane_sum) / mass
     return v, exact
+
+
+#: Quantum of the plane keys of :func:`plane_labels`, relative (unit normals; plane offsets
+#: over the scene's scale): far below :data:`PLANE_RTOL`, so two pixels share a label only when
+#: their planes agree to better than the kernel's own plane test can tell.
+PLANE_KEY_QUANTUM = 1e-9
+
+
+def plane_labels(gbuffer) -> np.ndarray | None:
+    """(H, W) int64 label of the world plane each pixel's flat triangle lies in, 0 where the
+    pixel is background or its shading normal is not the triangle's (smooth shading); None when
+    the G-buffer has no per-hit data (:meth:`vobscure.GBuffer.from_arrays`: its planes are
+    known only to the depth's precision).
+
+    Pixels share a label when their triangles' planes (unit normal n, offset n . x) agree
+    within :data:`PLANE_KEY_QUANTUM` (relative): coplanar triangles of a wall, not its
+    neighbour. A plane whose key falls on a quantum's edge may get two labels, which only
+    makes :func:`on_one_plane` more cautious.
+    """
+    if getattr(gbuffer, "_hit_source", None) is None:
+        return None
+    hits = gbuffer.hits
+    index = np.asarray(hits["index"])
+    n = np.asarray(hits["world_geometric_normal"], dtype=np.float64)
+    flat = (np.asarray(hits["world_normal"]) == n).all(axis=1)
+    p = np.asarray(hits["world_position"], dtype=np.float64)
+    offset = np.einsum("ij,ij->i", n, p)
+    scale = max(1.0, float(np.abs(p).max(initial=0.0)))
+    key = np.column_stack([np.rint(n / PLANE_KEY_QUANTUM),
+                           np.rint(offset / (scale * PLANE_KEY_QUANTUM))]).astype(np.int64)
+    labels = np.zeros(gbuffer.depth.size, dtype=np.int64)
+    if flat.any():
+        _, inverse = np.unique(key[flat], axis=0, return_inverse=True)
+        labels[index[flat]] = inverse.reshape(-1) + 1
+    return labels.reshape(gbuffer.depth.shape)
+
+
+def _summed(a: np.ndarray) -> np.ndarray:
+    """Summed-area table with a zero first row and column: S[i, j] = a[:i, :j].sum()."""
+    S = np.zeros((a.shape[0] + 1, a.shape[1] + 1), dtype=np.int64)
+    np.cumsum(np.cumsum(a, axis=0, dtype=np.int64), axis=1, out=S[1:, 1:])
+    return S
+
+
+class PlaneTables:
+    """Summed-area tables of :func:`plane_labels` and of their squares, built once per image:
+    a rectangle holds one label L when its sum is L n and its sum of squares L^2 n (zero
+    variance; exact in int64)."""
+
+    def __init__(self, labels: np.ndarray):
+        self.labels = labels
+        self.S1 = _summed(labels)
+        self.S2 = _summed(labels * labels)
+
+    def one_label(self, label, r0, r1, c0, c1) -> np.ndarray:
+        """Whether every pixel of rows r0..r1, columns c0..c1 (inclusive) has ``label`` > 0."""
+        def box(S):
+            return S[r1 + 1, c1 + 1] - S[r0, c1 + 1] - S[r1 + 1, c0] + S[r0, c0]
+        n = (r1 - r0 + 1) * (c1 - c0 + 1)
+        return (label > 0) & (box(self.S1) == label * n) & (box(self.S2) == label * label * n)
+
+
+def on_one_plane(px, radius, tables: PlaneTables) -> np.ndarray:
+    """(k,) bool: the pixels whose every view ray through the ball reads, with the bilinear
+    fetch, a depth on the pixel's own plane.
+
+    The rays of the box of :func:`ball_box` land in a rectangle of pixel positions; its
+    bilinear cells span the pixels from floor of its low corner to one past floor of its high
+    corner. When that rectangle lies in the image and all its pixels carry the pixel's plane label,
+    every fetched depth is the plane's (1/z, or z orthographically, is affine in the image
+    position on a plane, and bilinear interpolation reproduces it), so each segment's occupied
+    part is its part behind the tangent plane and the control variate of :func:`ray_kernel`
+    cancels it exactly: V = 1/2 (1 with ``normal_clamp``), what the kernel returns there.
+    """
+    a0, a1, b0, b1, exact = ball_box(px, radius)
+    H, W = px.shape
+    with np.errstate(invalid="ignore", over="ignore"):
+        # pixel coordinates relative to the first pixel centre; y decreases as b grows
+        x0 = np.floor(px.fx * a0 + px.cx - 0.5)
+        x1 = np.floor(px.fx * a1 + px.cx - 0.5) + 1
+        y0 = np.floor(px.cy - 0.5 - px.fy * b1)
+        y1 = np.floor(px.cy - 0.5 - px.fy * b0) + 1
+    # inside the image only: beyond its edge ``offscreen="clamp"`` repeats the edge pixel's
+    # depth (not the plane's) and ``"open"`` reads nothing
+    ok = exact & (x0 >= 0) & (y0 >= 0) & (x1 <= W - 1) & (y1 <= H - 1)
+    c0, c1, r0, r1 = (np.where(ok, q, 0).astype(np.intp) for q in (x0, x1, y0, y1))
+    label = tables.labels.reshape(-1)[px.index]
+    return ok & tables.one_label(label, r0, r1, c0, c1)

@@ -17,7 +17,7 @@ from ..patterns import SamplePattern
 from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
-from ._segment import ray_kernel
+from ._segment import PlaneTables, on_one_plane, plane_labels, ray_kernel
 from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS, DepthCells, segment_kernel
 
 __all__ = ["vo_point", "vo_reference", "point_taps"]
@@ -38,13 +38,17 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
-def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen, fast=True):
+def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen, fast=True,
+            planes=None):
     """The ball VO from the view-ray segments of the stratified ``unit`` square points
     (:mod:`vobscure.screenspace._segment`), toroidally shifted per pixel by a tiled
     64 x 64 texture of uniform shifts. Pixels whose ball reaches the eye's plane z = 0
     (perspective) are point sampled instead, with as many points. ``fast``: the kernel of
     :mod:`vobscure.screenspace._segment_fast` (the same values within float64 rounding);
-    False: the plain ``_segment.ray_kernel``."""
+    False: the plain ``_segment.ray_kernel``. ``planes``: the :class:`PlaneTables` of the image
+    (:func:`_plane_tables`) or None; with them the pixels whose rays all read their own plane
+    (:func:`vobscure.screenspace._segment.on_one_plane`) take the value the kernel returns
+    there, 1/2 (1 with ``normal_clamp``), without integrating their segments."""
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness)
@@ -52,7 +56,7 @@ def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fet
     fallback = {}
     cells = {}
 
-    def kernel(px):
+    def segments(px):
         shift = C.noise_at(px, texture)
         if fast:
             if not cells:
@@ -74,7 +78,27 @@ def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fet
                                       thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
                                       texture=fallback["texture"])
         return v
+
+    def kernel(px):
+        if planes is None:
+            return segments(px)
+        flat = on_one_plane(px, radius, planes)
+        if not flat.any():
+            return segments(px)
+        v = np.full(len(px.index), 1.0 if normal_clamp else 0.5)
+        if not flat.all():
+            v[~flat] = segments(C.prepare(gbuffer, radius, index=px.index[~flat], depth64=px.depth_flat))
+        return v
     return C.run_chunks(gbuffer, radius, kernel, np.dtype(np.float64), chunk=SEGMENT_CHUNK_PIXELS if fast else C.CHUNK_PIXELS)
+
+
+def _plane_tables(gbuffer, *, thickness, fetch):
+    """The :class:`PlaneTables` of a rendered G-buffer for the plane shortcut of :func:`_ray_vo`
+    (which holds for the bilinear fetch without thickness), else None."""
+    if thickness is not None or fetch != "bilinear":
+        return None
+    labels = plane_labels(gbuffer)
+    return None if labels is None else PlaneTables(labels)
 
 
 def _is_centre(s) -> bool:
@@ -444,10 +468,11 @@ def _stratified_square(rng, n: int) -> np.ndarray:
 
 
 def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen,
-               groups, progress, along: str, fast: bool = True):
+               groups, progress, along: str, fast: bool = True, shortcut: bool = True):
     """:func:`vo_reference`; ``along="point"`` tests each stratified point on its own instead of
     integrating its view-ray segment (the same expectation, more variance: the independent
-    check of the tests)."""
+    check of the tests); ``shortcut=False`` integrates the segments of the pixels that see only
+    their own plane too (the same values: the tests' check of the shortcut)."""
     from tqdm.auto import tqdm
 
     pattern = samples if isinstance(samples, SamplePattern) else None
@@ -464,6 +489,7 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
         total = g * 2 * half
     else:
         total = g * len(pattern.points)
+    planes = _plane_tables(gbuffer, thickness=thickness, fetch=fetch) if shortcut and along == "segment" else None
     mean = M2 = None
     for k in tqdm(range(1, g + 1), desc="vo_reference", unit="group", disable=not progress, leave=False):
         if pattern is None and along == "point":
@@ -476,7 +502,7 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
         if pattern is None and along == "segment":
             x = _ray_vo(gbuffer, radius=radius, unit=_stratified_square(rng, total // g), normal_clamp=normal_clamp,
                         thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen,
-                        fast=fast)
+                        fast=fast, planes=planes)
         else:
             group_pattern = pattern if pattern is not None else SamplePattern(
                 points, np.ones(2 * half), method="stratified",
