@@ -69,6 +69,9 @@ YARDSTICK = "gtao:3"
 #: The fronts: (row column, cost column, error column).
 FRONTS = (("front_time", "seconds_incl_layers", "rmse"), ("front_time_band", "seconds_incl_layers", "thin_rmse"),
           ("front_taps", "taps_per_pixel", "rmse"), ("front_taps_band", "taps_per_pixel", "thin_rmse"))
+#: The figure draws an RMSE below this (an exact 0: estimate and reference both 1 wherever no
+#: ray is blocked) at this value, on its logarithmic axis.
+PLOT_FLOOR = 1e-3
 #: References by the registry (:data:`vobscure.references.REFERENCES`) names, and how tables name them.
 REFERENCE_NAMES = {"volumetric": "world-space VO", "ao": "cosine AO", "ao_uniform": "uniform AO",
                    "obscurance": "obscurance"}
@@ -287,6 +290,7 @@ def _scene_rows(name: str, profile, repeats: int) -> tuple[list, dict]:
                          taps_per_pixel=spec.taps(e.samples), values_per_tap=_values_per_tap(e, slots[e.layers]),
                          interval_slots=slots[e.layers] if e.layers > 1 else 0, rmse=whole.rmse, bias=whole.bias,
                          thin_rmse=band.rmse, thin_bias=band.bias, thin_pixels=band.pixels))
+    rows = [{c: r.get(c) for c in _COLUMNS} for r in rows]      # every row holds every column
     for column, labels in fronts(rows, name).items():
         for r in rows:
             r[column] = r["kind"] == "estimate" and r["label"] in labels
@@ -354,7 +358,7 @@ def verdict(rows, scene: str, *, band: bool = False, same_reference: bool = Fals
         return dict(yardstick=yard, best=None, ratio=float("nan"), cheapest=None,
                     sentence=f"{title}, {where}: no configuration is scored (the band is empty).")
     best = min(within, key=lambda r: (_num(r[err]), _num(r["seconds_incl_layers"])))
-    ratio = _num(yard[err]) / _num(best[err])
+    ratio = _num(yard[err]) / _num(best[err]) if _num(best[err]) > 0 else float("inf")
 
     def ref(r):
         return REFERENCE_NAMES.get(r["reference"], r["reference"])
@@ -366,8 +370,10 @@ def verdict(rows, scene: str, *, band: bool = False, same_reference: bool = Fals
         text = (f"{title}, {where}: within the time of {YARDSTICK} ({_ms(limit)}), the most accurate is "
                 f"{best['label']} ({_ms(_num(best['seconds_incl_layers']))}"
                 + (" incl. its extra layers' render" if best["layers"] > 1 else "")
-                + f"): RMSE {fmt(_num(best[err]))} against {ref(best)}, {ratio:.1f}x lower than {YARDSTICK}'s "
-                  f"{fmt(_num(yard[err]))} against {ref(yard)}.")
+                + f"): RMSE {fmt(_num(best[err]))} against {ref(best)}"
+                + (f", {ratio:.1f}x lower than" if np.isfinite(ratio) else " (exact: it reads what its reference "
+                   "reads on every pixel), where")
+                + f" {YARDSTICK}'s is {fmt(_num(yard[err]))} against {ref(yard)}.")
     good = [r for r in sel if _num(r[err]) <= _num(yard[err])
             and (not same_reference or r["reference"] == yard["reference"])]
     cheapest = min(good, key=lambda r: (_num(r["seconds_incl_layers"]), _num(r[err])))
@@ -428,8 +434,9 @@ def _panel(ax, sel, cost, err, front_col, *, title, xlabel):
     marker, the front as a staircase with its points labelled."""
     for r in sel:
         x, y = _num(r[cost]), _num(r[err])
-        if not (np.isfinite(x) and np.isfinite(y)) or x <= 0 or y <= 0:
+        if not (np.isfinite(x) and np.isfinite(y)) or x <= 0:
             continue
+        y = max(y, PLOT_FLOOR)
         kind = Entry(r["label"], r["family"], r["method"], r["samples"], r["variant"], r["layers"]).kind
         ax.scatter(x * (1e3 if cost.startswith("seconds") else 1), y, s=22, color=_FAMILY_COLORS[r["family"]],
                    marker=_KIND_MARKERS[kind], alpha=0.85, edgecolors="none")
@@ -438,7 +445,7 @@ def _panel(ax, sel, cost, err, front_col, *, title, xlabel):
     if front:
         scale = 1e3 if cost.startswith("seconds") else 1
         xs = [_num(r[cost]) * scale for r in front]
-        ys = [_num(r[err]) for r in front]
+        ys = [max(_num(r[err]), PLOT_FLOOR) for r in front]
         ax.step(xs, ys, where="post", color="k", lw=0.9, alpha=0.7)
         for x, y, r in zip(xs, ys, front):
             ax.annotate(r["label"], (x, y), textcoords="offset points", xytext=(3, 3), fontsize=6.5)
@@ -447,7 +454,7 @@ def _panel(ax, sel, cost, err, front_col, *, title, xlabel):
     ax.grid(True, which="both", color="0.9", lw=0.6)
     ax.set_title(title, fontsize=10)
     ax.set_xlabel(xlabel, fontsize=9)
-    ax.set_ylabel("RMSE against its own reference", fontsize=9)
+    ax.set_ylabel(f"RMSE against its own reference (0 drawn at {PLOT_FLOOR:g})", fontsize=9)
 
 
 def plot(rows, fig) -> None:
