@@ -103,19 +103,23 @@ def test_the_verdict_names_a_configuration_on_the_time_front(rows, band):
 
 def test_the_verdict_on_hand_made_rows():
     """The yardstick at 10 ms, RMSE 0.1: 'a' (5 ms, 0.05) wins at equal time by 2x and is the
-    cheapest as accurate; 'b' is more accurate but slower; 'c' cheaper but worse."""
+    cheapest as accurate; 'b' is more accurate but slower; 'c' cheaper but worse; against the
+    yardstick's reference alone 'd' wins; without 'a' and 'd' nothing beats the yardstick."""
     def row(label, ms, e, reference="ao", layers=1):
         return dict(scene="s", kind="estimate", label=label, seconds_incl_layers=ms / 1e3, rmse=e, thin_rmse=e,
                     taps_per_pixel=1, reference=reference, layers=layers)
 
-    rows = [row("gtao:3", 10, 0.1), row("a", 5, 0.05, "volumetric", 2), row("b", 12, 0.01), row("c", 2, 0.3)]
+    rows = [row("gtao:3", 10, 0.1), row("d", 7, 0.05), row("a", 5, 0.05, "volumetric", 2), row("b", 12, 0.01),
+            row("c", 2, 0.3)]                     # 'd' ties 'a' in error at more time: 'a' wins
     v = thin_pareto.verdict(rows, "s")
     assert (v["best"]["label"], v["ratio"], v["cheapest"]["label"]) == ("a", 2.0, "a")
     assert "a (5.0 ms incl. its extra layers' render): RMSE 0.050 against world-space VO, 2.0x lower than " \
         "gtao:3's is 0.100 against cosine AO." in v["sentence"]
     same = thin_pareto.verdict(rows, "s", same_reference=True)      # 'a' is scored against another reference
-    assert same["best"]["label"] == "gtao:3" and same["cheapest"]["label"] == "gtao:3"
-    assert "nothing within the time of gtao:3 (10.0 ms) beats it" in same["sentence"]
+    assert (same["best"]["label"], same["ratio"], same["cheapest"]["label"]) == ("d", 2.0, "d")
+    alone = thin_pareto.verdict([rows[0], rows[3], rows[4]], "s")
+    assert alone["best"]["label"] == "gtao:3" and alone["cheapest"]["label"] == "gtao:3"
+    assert "nothing within the time of gtao:3 (10.0 ms) beats it" in alone["sentence"]
 
 
 def test_markdown_and_the_files(rows, tmp_path):
