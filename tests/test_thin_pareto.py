@@ -114,7 +114,7 @@ def test_the_verdict_on_hand_made_rows():
     v = thin_pareto.verdict(rows, "s")
     assert (v["best"]["label"], v["ratio"], v["cheapest"]["label"]) == ("a", 2.0, "a")
     assert "a (5.0 ms incl. its extra layers' render): RMSE 0.050 against world-space VO, 2.0x lower than " \
-        "gtao:3's is 0.100 against cosine AO." in v["sentence"]
+        "gtao:3's 0.100 against cosine AO." in v["sentence"]
     same = thin_pareto.verdict(rows, "s", same_reference=True)      # 'a' is scored against another reference
     assert (same["best"]["label"], same["ratio"], same["cheapest"]["label"]) == ("d", 2.0, "d")
     alone = thin_pareto.verdict([rows[0], rows[3], rows[4]], "s")

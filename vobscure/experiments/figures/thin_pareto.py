@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import deprecated_make
-from ._common import Rows, fmt
+from ._common import Rows, fmt, log_log
 
 __all__ = ["measure", "plot", "markdown", "configurations", "fronts", "verdict", "Entry", "SCENES", "LAYERS",
            "VO_THICKNESS", "FRONTS", "YARDSTICK"]
@@ -371,9 +371,9 @@ def verdict(rows, scene: str, *, band: bool = False, same_reference: bool = Fals
                 f"{best['label']} ({_ms(_num(best['seconds_incl_layers']))}"
                 + (" incl. its extra layers' render" if best["layers"] > 1 else "")
                 + f"): RMSE {fmt(_num(best[err]))} against {ref(best)}"
-                + (f", {ratio:.1f}x lower than" if np.isfinite(ratio) else " (exact: it reads what its reference "
-                   "reads on every pixel), where")
-                + f" {YARDSTICK}'s is {fmt(_num(yard[err]))} against {ref(yard)}.")
+                + (f", {ratio:.1f}x lower than {YARDSTICK}'s" if np.isfinite(ratio) else
+                   f" (exact: it reads what its reference reads on every pixel), where {YARDSTICK} has")
+                + f" {fmt(_num(yard[err]))} against {ref(yard)}.")
     good = [r for r in sel if _num(r[err]) <= _num(yard[err])
             and (not same_reference or r["reference"] == yard["reference"])]
     cheapest = min(good, key=lambda r: (_num(r["seconds_incl_layers"]), _num(r[err])))
@@ -449,9 +449,7 @@ def _panel(ax, sel, cost, err, front_col, *, title, xlabel):
         ax.step(xs, ys, where="post", color="k", lw=0.9, alpha=0.7)
         for x, y, r in zip(xs, ys, front):
             ax.annotate(r["label"], (x, y), textcoords="offset points", xytext=(3, 3), fontsize=6.5)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.grid(True, which="both", color="0.9", lw=0.6)
+    log_log(ax)
     ax.set_title(title, fontsize=10)
     ax.set_xlabel(xlabel, fontsize=9)
     ax.set_ylabel(f"RMSE against its own reference (0 drawn at {PLOT_FLOOR:g})", fontsize=9)
