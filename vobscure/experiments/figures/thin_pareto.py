@@ -60,8 +60,9 @@ VBAO_THICKNESS = 0.5
 #: Blender's near thickness (a fraction of R here) and its far thickness, an angle
 #: (``fast_gi_thickness_far``, 45 degrees: docs/screenspace.md, "VBAO").
 BLENDER_NEAR, BLENDER_FAR = 0.25, math.pi / 4
-#: GTAO's thin-occluder compensation when on: the top of the 0-0.7 slider of XeGTAO's settings
-#: (its default is 0).
+#: GTAO's thin-occluder compensation when on: the top of the "expected range [0.0, 0.7]" that
+#: XeGTAO's settings clamp ``ThinOccluderCompensation`` to (``XeGTAO.h``, ``GTAOImGuiSettings``;
+#: default ``XE_GTAO_DEFAULT_THIN_OCCLUDER_COMPENSATION``, 0).
 THIN_OCCLUDER = 0.7
 #: The configuration the verdict measures the others against: XeGTAO's "high" preset, 3 slices
 #: of 3 steps a side, on the one-layer G-buffer.
