@@ -67,6 +67,10 @@ THIN_OCCLUDER = 0.7
 #: The configuration the verdict measures the others against: XeGTAO's "high" preset, 3 slices
 #: of 3 steps a side, on the one-layer G-buffer.
 YARDSTICK = "gtao:3"
+#: What the quick and the full profile measure with: image size, timed repeats, rays a pixel of
+#: the ray-cast AO and obscurance, points a ball of the world-space VO.
+QUICK = dict(size=(32, 32), repeats=1, rays=32, volume_samples=64)
+FULL = dict(size=(160, 160), repeats=5, rays=256, volume_samples=512)
 #: The fronts: (row column, cost column, error column).
 FRONTS = (("front_time", "seconds_incl_layers", "rmse"), ("front_time_band", "seconds_incl_layers", "thin_rmse"),
           ("front_taps", "taps_per_pixel", "rmse"), ("front_taps_band", "taps_per_pixel", "thin_rmse"))
@@ -202,14 +206,15 @@ def _values_per_tap(entry: Entry, slots: int) -> int:
     return 2 * slots + (0 if entry.family.startswith("VO") else texels)
 
 
-def _reference(scene, gbuffer, name: str, radius: float, profile):
+def _reference(scene, gbuffer, name: str, radius: float, settings: dict, seed: int):
     """The reference ``name`` of the registry on ``gbuffer``: :func:`vobscure.ground_truth`
-    with the registry's arguments (ball, no thickness, no falloff) at the profile's samples."""
+    with the registry's arguments (ball, no thickness, constant falloff) at the ``settings``'
+    rays or points."""
     from ... import ground_truth
     from ...references import get
 
-    args = get(name).arguments(radius=radius, seed=profile.seed, rays=profile.pick(32, 256),
-                               volume_samples=profile.pick(64, 512), normal_clamp=False, falloff="constant",
+    args = get(name).arguments(radius=radius, seed=seed, rays=settings["rays"],
+                               volume_samples=settings["volume_samples"], normal_clamp=False, falloff="constant",
                                allow_open=False)
     return ground_truth(scene, gbuffer, **args)
 
@@ -249,7 +254,7 @@ def _load() -> float:
         return float("nan")
 
 
-def _scene_rows(name: str, profile, repeats: int) -> tuple[list, dict]:
+def _scene_rows(name: str, settings: dict, seed: int) -> tuple[list, dict]:
     """Rows and title numbers of one scene: its renders, then every configuration."""
     from ... import render_gbuffer, scenes
     from ...metrics import error, thin_feature_mask
@@ -257,14 +262,15 @@ def _scene_rows(name: str, profile, repeats: int) -> tuple[list, dict]:
     from ..common import choose_radius, time_calls
 
     sc = getattr(scenes, name)()
-    camera = sc.camera(profile.pick((32, 32), (160, 160)))
+    camera = sc.camera(settings["size"])
+    repeats = settings["repeats"]
     timings, gbs = time_calls({K: (lambda K=K: render_gbuffer(sc, camera, layers=K)) for K in LAYERS}, repeats)
     gb1 = gbs[1]
     radius = choose_radius(sc, gb1).radius
     covered = np.asarray(gb1.valid)
     median_depth = float(np.median(np.asarray(gb1.depth)[covered]))
     mask = thin_feature_mask(gb1, radius=radius)
-    refs = {ref: _reference(sc, gb1, ref, radius, profile) for ref in REFERENCE_NAMES}
+    refs = {ref: _reference(sc, gb1, ref, radius, settings, seed) for ref in REFERENCE_NAMES}
     one = timings[1].median
     slots = {K: (0 if gbs[K].intervals is None else int(gbs[K].intervals.count)) for K in LAYERS}
     rows = []
@@ -306,25 +312,37 @@ def measure(profile, *, scenes=SCENES):
     """Rows of every scene of ``scenes``: per scene the renders (``kind="render"``) and every
     configuration of :func:`configurations` (``kind="estimate"``), with the fronts.
 
-    Quick: 32 x 32, one timed repeat, 32 rays a pixel for the ray-cast AO and obscurance, 64
-    points a ball for the world-space VO; full: 160 x 160, 5 repeats, 256 and 512.
+    Parameters
+    ----------
+    profile : Profile
+        Quick (:data:`QUICK`: 32 x 32, one timed repeat, 32 rays, 64 points a ball) or full
+        (:data:`FULL`: 160 x 160, 5 repeats, 256 rays, 512 points); its seed seeds the
+        references (the estimators keep their default seed, 0).
+    scenes : sequence of str, optional
+        Some of :data:`SCENES` (default all three).
+
+    Returns
+    -------
+    Rows
+        Every row with every column of the CSV; ``meta`` holds the run (size, repeats, the
+        load average before and after, the machine) and per scene the radius, the band's size
+        and the references' standard errors.
     """
     from ..common import machine
 
     unknown = [s for s in scenes if s not in SCENES]
     if unknown or not scenes:
         raise ValueError(f"scenes must be some of {', '.join(SCENES)}, got {scenes!r}")
-    repeats = profile.pick(1, 5)
+    settings = profile.pick(QUICK, FULL)
     load = [_load()]
     rows, per_scene = [], {}
     for name in scenes:
-        scene_rows, per_scene[name] = _scene_rows(name, profile, repeats)
+        scene_rows, per_scene[name] = _scene_rows(name, settings, profile.seed)
         rows += scene_rows
     load.append(_load())
-    size = profile.pick((32, 32), (160, 160))
-    meta = dict(scenes=list(scenes), size=list(size), repeats=repeats, seed=profile.seed, quick=profile.quick,
-                rays=profile.pick(32, 256), volume_samples=profile.pick(64, 512), load_average=load,
-                machine=machine(), per_scene=per_scene)
+    meta = dict(scenes=list(scenes), size=list(settings["size"]), repeats=settings["repeats"], seed=profile.seed,
+                quick=profile.quick, rays=settings["rays"], volume_samples=settings["volume_samples"],
+                load_average=load, machine=machine(), per_scene=per_scene)
     return Rows(rows, columns=_COLUMNS, meta=meta)
 
 
