@@ -35,7 +35,8 @@ from ._segment import BALL_MASS, PLANE_RTOL, ball_box
 MIN_BLOCK = 32768
 
 #: Valid pixels per chunk of :func:`vobscure.vo_reference`'s segment path: enough for one block
-#: per thread of :data:`MIN_BLOCK` pixels or more (about 1.5 kB of temporaries a pixel).
+#: per thread of :data:`MIN_BLOCK` pixels or more. Peak memory: 82 MB (tracemalloc) for the
+#: atrium at 640 x 360, the per-image tables included: under 630 bytes a pixel of the chunk.
 CHUNK_PIXELS = 131072
 
 _POOL: list[ThreadPoolExecutor] = []
