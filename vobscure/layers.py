@@ -33,7 +33,9 @@ class SolidIntervals:
     front, back : (M, H, W) array_like of float
         Entry and exit depths, M >= 1 intervals per pixel.
     dtype : numpy dtype, optional
-        float64 (default) or float32.
+        float64 (default) or float32. :func:`vobscure.render_gbuffer` makes float32
+        intervals (8 bytes a slot: the float64 depths rounded, relative 6e-8), and the
+        estimators compare depths with them in float32 (``docs/layers.md``, "Memory").
     layers : PeeledLayers, optional
         The surfaces the intervals were made of (depth peeling); None when they came from
         elsewhere (a back-face depth pass, or made by hand).

@@ -55,12 +55,16 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
 
     Notes
     -----
-    Memory: ``layers=K`` adds to the one-layer G-buffer 9 bytes per pixel per layer for the
-    surfaces (float32 depth, int32 triangle, bool entering; 10 with an open mesh in the scene,
-    whose flag is kept too) and 16 bytes per pixel per interval slot for the float64 intervals
-    (M slots, the most intervals any pixel has: about K / 2 on closed scenes).
-    ``benchmarks/bench_layers.py`` measures the peak (``docs/layers.md``). Time: one more
-    Embree query per layer, on the rays still going.
+    Memory: ``layers=K`` adds to the one-layer G-buffer, per pixel, 1 byte for the first
+    layer (whether the ray enters a solid there: its depth and triangle are the G-buffer's
+    own ``depth`` and ``primitive``, not repeated), 9 bytes for each layer behind it (float32
+    depth, int32 triangle, bool entering; whether a surface is open is made from its
+    triangle) and 8 bytes per interval slot (float32 front and back; M slots, the most
+    intervals any pixel has: about K / 2 on closed scenes). The intervals are made after the
+    peeling, when the bands' temporaries are gone, and are the float64 depths' intervals
+    rounded to float32 (relative 6e-8 of the depth; how the estimators read them:
+    ``docs/layers.md``, "Memory"). ``benchmarks/bench_layers.py`` measures the peak. Time:
+    one more Embree query per layer, on the rays still going.
 
     A surface closer than the tracer's offset (1e-5 of the scene's scale) behind a hit is not
     seen: of two faces that touch (a box standing on a floor) the peeling finds one, which
