@@ -362,8 +362,8 @@ def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None,
     dtype : numpy dtype, optional
         Of the intervals.
     depth : (K, H, W) array_like of float, optional
-        The layers' depths at a higher precision than the stored float32 (the renderer passes
-        its float64 depths); default ``layers.depth``.
+        The layers' depths at a higher precision than the stored float32 (e.g. layer 0 from
+        the G-buffer's float64 ``depth``); default ``layers.depth``.
     origin_inside : (H, W) array_like of bool, optional
         Where the first surface leaves a solid: whether the ray's origin (the camera) is inside
         that solid (the renderer asks the mesh, ``trimesh.Trimesh.contains``). Default: True
