@@ -2,8 +2,11 @@
 
 The machine this runs on is shared and noisy, so every time is a *ratio* of two timings taken
 in the same run (best of ``--repeats`` rounds, the calls interleaved round by round,
-``_bench.interleaved``); absolute times are context only. Memory is exact: tracemalloc's peak
-of one call (``_bench.peak_bytes``), which counts NumPy's arrays.
+``_bench.interleaved``); absolute times are context only. Memory: tracemalloc's peak of one
+call (``_bench.peak_bytes``), which counts NumPy's arrays exactly; the bands of rows run on
+several threads, whose temporaries overlap differently from call to call (one call's peak
+moves by up to ~10 B/px), so each peak is the median of ``--repeats`` calls (interleaved
+round by round), and the spread (max - min) of those calls is printed beside it.
 
 What is measured
 ----------------
@@ -13,14 +16,15 @@ its suggested camera, 512 x 512 (128 x 128 with ``--quick``), on every usable co
 
 - **time**: K layers / one layer (the G-buffer of today), and that ratio per extra layer;
 - **memory**: the peak of one call, (peak(K) - peak(1)) / ((K - 1) pixels): bytes per pixel
-  per layer beyond one (goal <= 24), with what the result holds (the surfaces,
-  ``PeeledLayers.nbytes``, and the intervals' float64 slots) beside it;
+  per layer beyond one (goal <= 24), with what the result holds beyond the one-layer
+  G-buffer (the surfaces, ``PeeledLayers.nbytes``, and the intervals' float32 slots) per
+  pixel beside it;
 - **coverage**: the interval slots M, and the fraction of covered pixels whose last interval
   is still open after K layers (its end unseen: the ray crossed at least K surfaces).
 
 Run from the repository root::
 
-    python benchmarks/bench_layers.py            # about a minute
+    python benchmarks/bench_layers.py            # about two minutes
     python benchmarks/bench_layers.py --quick    # a few seconds (smoke test)
 """
 
@@ -40,13 +44,13 @@ MEMORY_GOAL = 24.0
 
 class Report(_bench.Report):
     columns = (f"{'scene':<12} {'K':>2} {'seconds':>9} {'x K=1':>7} {'cores':>6} {'peak B/px':>10} "
-               f"{'B/px/extra':>11} {'held B/px':>10} {'M':>3} {'open end':>9}")
+               f"{'spread':>7} {'B/px/extra':>11} {'held B/px':>10} {'M':>3} {'open end':>9}")
     summary_title = "Summary (K layers against one, same run)"
 
-    def row(self, name, K, t, ratio, peak, extra, held, M, unseen):
+    def row(self, name, K, t, ratio, peak, spread, extra, held, M, unseen):
         extra_s = "" if extra is None else f"{extra:11.1f}"
         print(f"  {name:<12} {K:>2} {t.seconds:9.4f} {ratio:7.2f} {t.cores:6.2f} {peak:10.1f} "
-              f"{extra_s:>11} {held:10.1f} {M:>3} {unseen:9.1%}")
+              f"{spread:7.1f} {extra_s:>11} {held:10.1f} {M:>3} {unseen:9.1%}")
 
 
 def main(argv=None) -> int:
@@ -63,7 +67,11 @@ def main(argv=None) -> int:
             pixels = cam.width * cam.height
             times = _bench.interleaved({K: (lambda K=K: vo.render_gbuffer(scene, cam, layers=K)) for K in LAYERS},
                                        args.repeats)
-            peaks = {K: _bench.peak_bytes(lambda K=K: vo.render_gbuffer(scene, cam, layers=K)) for K in LAYERS}
+            calls = {K: [] for K in LAYERS}
+            for _ in range(args.repeats):
+                for K in LAYERS:
+                    calls[K].append(_bench.peak_bytes(lambda K=K: vo.render_gbuffer(scene, cam, layers=K)))
+            peaks = {K: float(np.median(v)) for K, v in calls.items()}
             report.header(f"{name}: {cam.width} x {cam.height}, {len(scene.triangles)} triangles "
                           f"({args.repeats} rounds, best)")
             for K in LAYERS:
@@ -83,7 +91,8 @@ def main(argv=None) -> int:
                     report.note(f"{name}: time K={K} / K=1 (per extra layer {(ratio - 1) / (K - 1):.2f})", ratio)
                     report.goal(f"{name}: peak bytes per pixel per extra layer, K={K}", extra, MEMORY_GOAL,
                                 at_least=False, unit=" B")
-                report.row(name, K, times[K], ratio, peaks[K] / pixels, extra, held, M, unseen)
+                spread = (max(calls[K]) - min(calls[K])) / pixels
+                report.row(name, K, times[K], ratio, peaks[K] / pixels, spread, extra, held, M, unseen)
 
     return _bench.run(body, Report())
 

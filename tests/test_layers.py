@@ -59,7 +59,7 @@ def test_gbuffer_carries_intervals_through_astype():
 
 
 # ------------------------------------------------------------------ the enter/leave rule
-from vobscure.layers import PeeledLayers, intervals_from_layers  # noqa: E402
+from vobscure.layers import PeeledLayers, interval_count, intervals_from_layers  # noqa: E402
 
 E, L, S = "enter", "leave", "sheet"
 
@@ -75,8 +75,11 @@ def _one_ray(events, origin_inside=None):
                           open_surface=np.array([k == S for k in kinds]).reshape(K, 1, 1))
     inside = None if origin_inside is None else np.array([[origin_inside]])
     s = intervals_from_layers(layers, origin_inside=inside)
-    pairs = list(zip(s.front[:, 0, 0].tolist(), s.back[:, 0, 0].tolist()))
-    return [p for p in pairs if p != (INF, INF)]
+    pairs = [p for p in zip(s.front[:, 0, 0].tolist(), s.back[:, 0, 0].tolist()) if p != (INF, INF)]
+    # the count the renderer allocates by, from the surfaces' kinds alone
+    flat = [a.reshape(K, 1) for a in (layers.primitive >= 0, layers.entering, layers.open_surface)]
+    assert interval_count(*flat).tolist() == [len(pairs)]
+    return pairs
 
 
 @pytest.mark.parametrize("events, expected", [
@@ -139,3 +142,83 @@ def test_peeled_layers_errors_and_astype_keeps_them():
         SolidIntervals(np.ones((1, 3, 3)), np.ones((1, 3, 3)), layers=layers)
     with pytest.raises(ValueError, match="origin_inside must be a bool array"):
         intervals_from_layers(layers, origin_inside=np.ones((2, 2)))
+
+
+# ------------------------------------------------------------------ layer 0 borrowed
+def _two_pixels(**kw):
+    """Two pixels, two layers: a solid from 1 to 2.5 (triangles 3 and 1), and background;
+    layer 0 borrowed from (H, W) images as the renderer borrows the G-buffer's."""
+    return PeeledLayers(np.array([[[2.5, INF]]], np.float32), np.array([[[1, -1]]], np.int32),
+                        np.array([[[True, False]], [[False, False]]]), face_normals=np.eye(4, 3),
+                        rotation=np.eye(3), first=(np.array([[1.0, INF]]), np.array([[3, -1]])), **kw)
+
+
+def test_a_borrowed_first_layer_reads_as_the_full_stack():
+    layers = _two_pixels()
+    assert layers.count == 2 and layers.shape == (1, 2)
+    assert layers.depth.dtype == np.float32 and layers.primitive.dtype == np.int32
+    assert layers.depth[:, 0].tolist() == [[1.0, INF], [2.5, INF]]
+    assert layers.primitive[:, 0].tolist() == [[3, -1], [1, -1]]
+    # stored: the layer behind (4 + 4 bytes a pixel) and entering of both layers (1 + 1)
+    assert layers.nbytes == (4 + 4 + 2) * 2
+    full = PeeledLayers(layers.depth, layers.primitive, layers.entering, face_normals=np.eye(4, 3),
+                        rotation=np.eye(3))
+    assert full.nbytes == 9 * 2 * 2
+    a, b = intervals_from_layers(layers), intervals_from_layers(full)
+    assert np.array_equal(a.front, b.front) and np.array_equal(a.back, b.back)
+    assert a.front[:, 0].tolist() == [[1.0, INF]] and a.back[:, 0].tolist() == [[2.5, INF]]
+    assert np.array_equal(layers.normal, full.normal)
+    # a crop keeps layer 0 borrowed
+    right = layers.crop(slice(0, 1), slice(1, 2))
+    assert right.depth[:, 0, 0].tolist() == [INF, INF] and right.nbytes == 10
+
+
+def test_open_flags_made_from_the_triangles():
+    # triangle 1 (the layer behind) belongs to an open mesh; none where there is no surface
+    layers = _two_pixels(open_triangle=np.array([False, True, False, False]))
+    assert layers.open_surface[:, 0].tolist() == [[False, False], [True, False]]
+    assert layers.nbytes == (4 + 4 + 2) * 2
+    assert layers.crop(slice(0, 1), slice(0, 1)).open_surface[:, 0, 0].tolist() == [False, True]
+    assert not _two_pixels().open_surface.any()
+
+
+def test_borrowed_first_layer_errors():
+    with pytest.raises(ValueError, match="first must be a pair"):
+        PeeledLayers(np.ones((1, 1, 2)), np.zeros((1, 1, 2), int), np.zeros((2, 1, 2), bool),
+                     face_normals=[[0, 0, 1]], rotation=np.eye(3), first=np.ones((1, 2)))
+    with pytest.raises(ValueError, match="first's depth must be a float array"):
+        PeeledLayers(np.ones((1, 1, 2)), np.zeros((1, 1, 2), int), np.zeros((2, 1, 2), bool),
+                     face_normals=[[0, 0, 1]], rotation=np.eye(3), first=(np.ones((2, 1)), np.zeros((1, 2), int)))
+    with pytest.raises(ValueError, match="first's primitive must be an integer array"):
+        PeeledLayers(np.ones((1, 1, 2)), np.zeros((1, 1, 2), int), np.zeros((2, 1, 2), bool),
+                     face_normals=[[0, 0, 1]], rotation=np.eye(3), first=(np.ones((1, 2)), np.zeros((1, 2))))
+    with pytest.raises(ValueError, match=r"entering must be a bool array of shape \(2, 1, 2\)"):
+        PeeledLayers(np.ones((1, 1, 2)), np.zeros((1, 1, 2), int), np.zeros((1, 1, 2), bool),
+                     face_normals=[[0, 0, 1]], rotation=np.eye(3), first=(np.ones((1, 2)), np.zeros((1, 2), int)))
+    with pytest.raises(ValueError, match="open_surface or open_triangle, not both"):
+        _two_pixels(open_surface=np.zeros((2, 1, 2), bool), open_triangle=np.zeros(4, bool))
+    with pytest.raises(ValueError, match="open_triangle must be a bool array of shape \\(4,\\)"):
+        _two_pixels(open_triangle=np.zeros(3, bool))
+
+
+# ------------------------------------------------------------------ float32 intervals, read
+def test_float32_intervals_are_read_in_their_precision():
+    """The renderer's float32 intervals against float64 tap and sample depths: compared in
+    float32, a surface's own depth d meets the interval that starts (or is) at float32(d)."""
+    from vobscure.screenspace import _common as C
+
+    d = 1.0 + 2.0 ** -30                          # float32 rounds it down to 1.0
+    d32 = float(np.float32(d))
+    assert d32 < d
+    idx = np.zeros(1, dtype=np.intp)
+    # an open sheet at d, then a solid 2..3: the tapped occluder is the sheet, of no thickness
+    sheet = SolidIntervals([[[d32]], [[2.0]]], [[[d32]], [[3.0]]], dtype=np.float32)
+    assert C.interval_back(sheet, idx, np.array([d])).tolist() == [d]
+    # the same ends in float64 are read as they are: the sheet ends before d, the solid is found
+    assert C.interval_back(sheet.astype(np.float64), idx, np.array([d])).tolist() == [3.0]
+    # a sample at the surface's own depth is outside, as the depth test z > d has it; past
+    # float32's rounding it is inside
+    solid = SolidIntervals([[[d32]]], [[[INF]]], dtype=np.float32)
+    z = np.array([d, float(np.nextafter(np.float32(d32), np.float32(2.0)))])
+    assert C.inside_intervals(solid, np.zeros(2, np.intp), z).tolist() == [False, True]
+    assert C.inside_intervals(solid.astype(np.float64), np.zeros(2, np.intp), z).tolist() == [True, True]

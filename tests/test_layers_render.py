@@ -6,6 +6,7 @@ import pytest
 import trimesh
 
 import vobscure as vo
+from vobscure.layers import intervals_from_layers
 from vobscure.scenes import AlphaMask
 
 INF = np.inf
@@ -52,6 +53,47 @@ def test_first_layer_is_the_one_layer_gbuffer_bit_for_bit(name, K):
     layers = many.intervals.layers
     assert np.array_equal(layers.depth[0], one.depth.astype(np.float32))
     assert np.array_equal(layers.primitive[0], one.primitive)
+
+
+# ------------------------------------------------------------------ what is stored
+@pytest.mark.parametrize("K", [2, 4, 8])
+def test_stored_layers_and_float32_intervals(K):
+    """Layer 0 is borrowed from the G-buffer (1 byte a pixel stored for it, 9 for each layer
+    behind), the intervals are float32 (8 bytes a slot), and they are the enter/leave rule
+    of the public function on the same surfaces, rounded to float32."""
+    scene = vo.scenes.get("cornell_box")
+    cam = scene.camera((40, 30))
+    gb = vo.render_gbuffer(scene, cam, layers=K)
+    s, layers = gb.intervals, gb.intervals.layers
+    n = 40 * 30
+    assert layers.nbytes == (1 + 9 * (K - 1)) * n
+    assert s.dtype == np.float32 and s.front.nbytes == s.back.nbytes == 4 * s.count * n
+    # the rule on the whole image at once, in float64 from the G-buffer's own depth (the
+    # camera is inside no solid of the Cornell box)
+    depth = np.concatenate([np.asarray(gb.depth, np.float64)[None], layers.depth[1:]])
+    ref = intervals_from_layers(layers, depth=depth, origin_inside=np.zeros((30, 40), bool))
+    assert ref.count == s.count
+    assert np.array_equal(ref.front.astype(np.float32), s.front)
+    assert np.array_equal(ref.back.astype(np.float32), s.back)
+
+
+def test_chunks_of_the_peeling_assemble_the_same_image(monkeypatch):
+    """Peeled in chunks of 7 rays (the pixels of one chunk need fewer slots than the image's
+    M), the layers and intervals are those of one chunk per band."""
+    import vobscure.render as render
+
+    scene = vo.Scene({"sheet": _quad(-3, 0.1, -3, 3, 1.5), "inner": _quad(-3, 3, -3, 3, 0.0, up=False),
+                      "box": _box((-3, -0.5, -3), (3, 0.5, 3))})
+    cam = _perspective(size=(9, 8))
+    whole = vo.render_gbuffer(scene, cam, layers=4)
+    monkeypatch.setattr(render, "PEEL_RAYS", 7)
+    chunked = vo.render_gbuffer(scene, cam, layers=4)
+    a, b = whole.intervals, chunked.intervals
+    assert a.count == b.count == 2
+    assert np.isinf(a.front[1]).any() and np.isfinite(a.front[1]).any()   # some pixels need one slot
+    assert np.array_equal(a.front, b.front) and np.array_equal(a.back, b.back)
+    for attr in ("depth", "primitive", "entering", "open_surface"):
+        assert np.array_equal(getattr(a.layers, attr), getattr(b.layers, attr)), attr
 
 
 # ------------------------------------------------------------------ closed boxes, by hand
@@ -135,6 +177,7 @@ def test_open_sheet_is_a_zero_thickness_interval():
     np.testing.assert_allclose(s.front[1], 2.5, atol=DEPTH_TOL)
     np.testing.assert_allclose(s.back[1], 3.5, atol=DEPTH_TOL)   # the inner sheet changes nothing
     assert layers.open_surface[:3, 0, 0].tolist() == [True, False, True]
+    assert layers.nbytes == (1 + 9 * 3) * gb.depth.size       # the open flags are made from the triangles
     # the sheet's winding normal points up, towards the camera: "entering", whatever the rule
     assert layers.entering[0].all() and not layers.entering[2].any()
     # nothing is inside a zero-thickness interval except its own depth
@@ -285,7 +328,8 @@ def test_back_depth_is_one_interval(kind):
     scene = vo.Scene(_box((-3, -0.5, -3), (3, 0.25, 3)))
     cam = _perspective()
     peeled = vo.render_gbuffer(scene, cam, layers=2)
-    z_f, z_b = peeled.depth, peeled.intervals.back[0]
+    # the peeled intervals are float32; the encodings are tested in float64
+    z_f, z_b = peeled.depth, peeled.intervals.back[0].astype(np.float64)
     n, f = 0.5, 10.0
     rays = np.linalg.norm(cam.unproject(cam.pixel_centers(), 1.0), axis=-1)
     encode = {"linear": lambda z: z, "ndc": lambda z: _ndc(z, n, f),

@@ -84,7 +84,9 @@ class GBuffer:
     intervals : SolidIntervals, optional
         The solid intervals along the pixels' rays (:class:`vobscure.layers.SolidIntervals`,
         of the image's shape), for the estimators' ``thickness="layers"``; None: only the
-        first surface is known.
+        first surface is known. float32 intervals are kept as they are in a float64 G-buffer
+        (the renderer makes them float32: ``docs/layers.md``, "Memory"); float64 intervals
+        are rounded to a float32 G-buffer's dtype.
     guard : int, optional
         Width in pixels of the guard band around the image (0: none): the buffers cover the
         inner frame widened by ``guard`` pixels on each side (what
@@ -147,7 +149,9 @@ class GBuffer:
             raise ValueError(f"intervals must be a vobscure.layers.SolidIntervals, got {type(intervals).__name__}")
         if intervals.shape != self.depth.shape:
             raise ValueError(f"intervals must have the image's shape {self.depth.shape}, got {intervals.shape}")
-        return intervals.astype(self.dtype) if intervals.dtype != self.dtype else intervals
+        # float32 intervals are kept as they are in a float64 G-buffer (the renderer's: 8 bytes a
+        # slot); float64 intervals in a float32 G-buffer are rounded to it
+        return intervals.astype(self.dtype) if intervals.dtype.itemsize > self.dtype.itemsize else intervals
 
     def with_intervals(self, intervals) -> "GBuffer":
         """The same G-buffer with the solid intervals ``intervals`` (a

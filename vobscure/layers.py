@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SolidIntervals", "PeeledLayers", "intervals_from_layers", "ray_intervals"]
+__all__ = ["SolidIntervals", "PeeledLayers", "intervals_from_layers", "ray_intervals", "interval_count"]
 
 
 class SolidIntervals:
@@ -33,7 +33,9 @@ class SolidIntervals:
     front, back : (M, H, W) array_like of float
         Entry and exit depths, M >= 1 intervals per pixel.
     dtype : numpy dtype, optional
-        float64 (default) or float32.
+        float64 (default) or float32. :func:`vobscure.render_gbuffer` makes float32
+        intervals (8 bytes a slot: the float64 depths rounded, relative 6e-8), and the
+        estimators compare depths with them in float32 (``docs/layers.md``, "Memory").
     layers : PeeledLayers, optional
         The surfaces the intervals were made of (depth peeling); None when they came from
         elsewhere (a back-face depth pass, or made by hand).
@@ -122,21 +124,25 @@ class PeeledLayers:
     :func:`vobscure.render_gbuffer` with ``layers=K`` finds them.
 
     Layer 0 is the G-buffer's own surface; layer k the (k+1)-th surface the pixel centre's ray
-    crosses (alpha-tested holes are passed, as the tracer passes them). Stored per pixel per
-    layer: 9 bytes (float32 depth, int32 triangle, bool entering); the normals are not stored
-    but made on access from the triangles.
+    crosses (alpha-tested holes are passed, as the tracer passes them). The renderer does not
+    repeat layer 0: its depth and triangle are the G-buffer's own images, kept by reference
+    (``first``), and each pixel stores 1 byte for layer 0 (entering) and 9 bytes for each
+    layer behind it (float32 depth, int32 triangle, bool entering). The normals, and with
+    ``open_triangle`` the open flags, are not stored but made on access from the triangles.
 
     Parameters
     ----------
     depth : (K, H, W) array_like of float
         Linear view depth z of each surface (float32 when stored); +inf where the ray crossed
-        fewer than k + 1 surfaces. Non-decreasing along k.
+        fewer than k + 1 surfaces. Non-decreasing along k. With ``first``: (K - 1, H, W), the
+        layers 1 to K - 1.
     primitive : (K, H, W) array_like of int
-        The triangle (index into ``scene.triangles``), -1 where there is no surface.
+        The triangle (index into ``scene.triangles``), -1 where there is no surface. With
+        ``first``: (K - 1, H, W), as ``depth``.
     entering : (K, H, W) array_like of bool
         True where the ray enters the solid behind the surface: the triangle's outward
         (winding) normal points against the ray, ``n . d < 0``; False where it leaves one, or
-        where there is no surface.
+        where there is no surface. All K layers, with or without ``first``.
     face_normals : (m, 3) array_like of float
         Unit outward (winding) normals of the triangles in world space (``scene.face_normals``;
         kept by reference, not copied).
@@ -144,18 +150,27 @@ class PeeledLayers:
         The camera's world -> view rotation (``camera.rotation``).
     open_surface : (K, H, W) array_like of bool, optional
         True where the surface belongs to an open mesh (``scene.open_meshes``): it bounds no
-        solid. Default: all False.
+        solid. Default: all False (or made from ``open_triangle``).
+    first : tuple of two (H, W) arrays, optional
+        ``(depth0, primitive0)``: layer 0's view depth (float, +inf where none) and triangle
+        (-1 where none), kept by reference (the renderer passes the G-buffer's ``depth`` and
+        ``primitive``). ``depth`` and ``primitive`` then hold the layers behind it only.
+    open_triangle : (m,) array_like of bool, optional
+        Per triangle, whether its mesh is open; ``open_surface`` is then made on access from
+        the triangles instead of stored. Not together with ``open_surface``.
 
     Attributes
     ----------
     depth : (K, H, W) float32
     primitive : (K, H, W) int32
+        Both made on access from layer 0's images and the stored layers behind it (4 bytes
+        per pixel per layer while held).
     entering, open_surface : (K, H, W) bool
     count : int
         K.
     nbytes : int
-        Bytes held per pixel, all layers: 9 K, plus K for ``open_surface`` when any surface is
-        open (None otherwise).
+        Bytes of the per-pixel images the layers store themselves (not layer 0's borrowed
+        images, nor the per-triangle tables).
 
     Examples
     --------
@@ -167,50 +182,105 @@ class PeeledLayers:
     (2, [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]])
     >>> intervals_from_layers(layers).front[:, 0, 0].tolist(), intervals_from_layers(layers).back[:, 0, 0].tolist()
     ([1.0], [2.0])
+
+    Layer 0 borrowed from a G-buffer's images (here made by hand), the layer behind it stored:
+
+    >>> behind = PeeledLayers(depth[1:], [[[1]]], [[[True]], [[False]]], face_normals=[[0, 0, -1], [0, 0, 1]],
+    ...                       rotation=np.eye(3), first=(np.array([[1.0]]), np.array([[0]])))
+    >>> behind.depth[:, 0, 0].tolist(), behind.primitive[:, 0, 0].tolist(), behind.nbytes
+    ([1.0, 2.0], [0, 1], 10)
     """
 
-    def __init__(self, depth, primitive, entering, *, face_normals, rotation, open_surface=None):
+    def __init__(self, depth, primitive, entering, *, face_normals, rotation, open_surface=None,
+                 first=None, open_triangle=None):
         z = np.asarray(depth, dtype=np.float32)
-        if z.ndim != 3 or z.shape[0] < 1:
+        behind = first is not None
+        if z.ndim != 3 or (z.shape[0] < 1 and not behind):
             raise ValueError(f"depth must have shape (K, H, W) with K >= 1, got {z.shape}")
         prim = np.asarray(primitive)
         if prim.shape != z.shape or prim.dtype.kind not in "iu":
             raise ValueError(f"primitive must be an integer array of the depth's shape {z.shape}, "
                              f"got {prim.dtype} of shape {prim.shape}")
+        if behind:
+            z0, prim0 = _first_layer(first, z.shape[1:])
+        else:
+            z0, prim0, z, prim = z[0], prim[0].astype(np.int32, copy=False), z[1:], prim[1:]
+        shape = (z.shape[0] + 1,) + z.shape[1:]
         enter = np.asarray(entering)
-        if enter.shape != z.shape or enter.dtype != bool:
-            raise ValueError(f"entering must be a bool array of the depth's shape {z.shape}, "
+        if enter.shape != shape or enter.dtype != bool:
+            raise ValueError(f"entering must be a bool array of shape {shape} (K, H, W), "
                              f"got {enter.dtype} of shape {enter.shape}")
-        if open_surface is None:
-            open_surface = np.broadcast_to(False, z.shape)
-        opened = np.asarray(open_surface)
-        if opened.shape != z.shape or opened.dtype != bool:
-            raise ValueError(f"open_surface must be a bool array of the depth's shape {z.shape}, "
-                             f"got {opened.dtype} of shape {opened.shape}")
-        self.depth = _frozen(z)
-        self.primitive = _frozen(prim.astype(np.int32, copy=False))
-        self.entering = _frozen(enter)
-        self.open_surface = _frozen(opened)
+        if open_surface is not None and open_triangle is not None:
+            raise ValueError("give open_surface or open_triangle, not both")
+        opened = None
+        if open_surface is not None:
+            opened = np.asarray(open_surface)
+            if opened.shape != shape or opened.dtype != bool:
+                raise ValueError(f"open_surface must be a bool array of shape {shape} (K, H, W), "
+                                 f"got {opened.dtype} of shape {opened.shape}")
         self._face_normals = np.asarray(face_normals, dtype=np.float64)
         self._rotation = np.asarray(rotation, dtype=np.float64)
         if self._face_normals.ndim != 2 or self._face_normals.shape[1] != 3:
             raise ValueError(f"face_normals must have shape (m, 3), got {self._face_normals.shape}")
         if self._rotation.shape != (3, 3):
             raise ValueError(f"rotation must have shape (3, 3), got {self._rotation.shape}")
+        if open_triangle is not None:
+            open_triangle = np.asarray(open_triangle)
+            if open_triangle.shape != (len(self._face_normals),) or open_triangle.dtype != bool:
+                raise ValueError(f"open_triangle must be a bool array of shape ({len(self._face_normals)},) "
+                                 f"(one per triangle), got {open_triangle.dtype} of shape {open_triangle.shape}")
+        self._first = (_frozen(z0), _frozen(prim0))
+        self._borrowed = behind
+        self._depth = _frozen(z)
+        self._primitive = _frozen(prim.astype(np.int32, copy=False))
+        self.entering = _frozen(enter)
+        self._open = None if opened is None else _frozen(opened)
+        self._open_triangle = open_triangle
 
     @property
     def count(self) -> int:
-        return int(self.depth.shape[0])
+        return int(self.entering.shape[0])
 
     @property
     def shape(self) -> tuple[int, int]:
-        return tuple(self.depth.shape[1:])
+        return tuple(self.entering.shape[1:])
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the stored per-layer images (depth, primitive, entering, open_surface)."""
-        opened = self.open_surface.nbytes if self.open_surface.strides[0] else 0
-        return int(self.depth.nbytes + self.primitive.nbytes + self.entering.nbytes + opened)
+        """Bytes of the per-pixel images stored here: the layers behind layer 0 (depth,
+        primitive), entering, and ``open_surface`` when it is stored; layer 0's images, when
+        borrowed (``first``), and the per-triangle tables are not counted."""
+        own = self._depth.nbytes + self._primitive.nbytes + self.entering.nbytes
+        if not self._borrowed:
+            own += self._first[0].nbytes + self._first[1].nbytes
+        return int(own + (0 if self._open is None else self._open.nbytes))
+
+    @property
+    def depth(self) -> np.ndarray:
+        """(K, H, W) float32 view depths, layer 0 rounded from its own image; made on access."""
+        out = np.empty(self.entering.shape, dtype=np.float32)
+        out[0] = self._first[0]
+        out[1:] = self._depth
+        return _frozen(out)
+
+    @property
+    def primitive(self) -> np.ndarray:
+        """(K, H, W) int32 triangles, -1 where there is no surface; made on access."""
+        out = np.empty(self.entering.shape, dtype=np.int32)
+        out[0] = self._first[1]
+        out[1:] = self._primitive
+        return _frozen(out)
+
+    @property
+    def open_surface(self) -> np.ndarray:
+        """(K, H, W) bool: the surface belongs to an open mesh (stored, or made on access from
+        ``open_triangle``)."""
+        if self._open is not None:
+            return self._open
+        if self._open_triangle is None:
+            return np.broadcast_to(False, self.entering.shape)
+        prim = self.primitive
+        return _frozen((prim >= 0) & self._open_triangle[np.maximum(prim, 0)])
 
     @property
     def normal(self) -> np.ndarray:
@@ -226,15 +296,36 @@ class PeeledLayers:
         return out
 
     def crop(self, rows: slice, cols: slice) -> "PeeledLayers":
-        """The layers of the pixels ``[rows, cols]`` (e.g. a guard band's inner frame)."""
-        opened = self.open_surface[:, rows, cols] if self.open_surface.strides[0] else None
-        return PeeledLayers(self.depth[:, rows, cols], self.primitive[:, rows, cols],
+        """The layers of the pixels ``[rows, cols]`` (e.g. a guard band's inner frame); layer 0
+        stays a view of its images."""
+        opened = None if self._open is None else self._open[:, rows, cols]
+        out = PeeledLayers(self._depth[:, rows, cols], self._primitive[:, rows, cols],
                             self.entering[:, rows, cols], face_normals=self._face_normals,
-                            rotation=self._rotation, open_surface=opened)
+                            rotation=self._rotation, open_surface=opened,
+                            first=(self._first[0][rows, cols], self._first[1][rows, cols]),
+                            open_triangle=self._open_triangle)
+        out._borrowed = self._borrowed
+        return out
 
     def __repr__(self) -> str:
         H, W = self.shape
         return f"PeeledLayers({self.count} per pixel, {W}x{H})"
+
+
+def _first_layer(first, shape) -> tuple[np.ndarray, np.ndarray]:
+    """Layer 0's ``(depth, primitive)`` images of ``shape``, validated, not copied."""
+    try:
+        z0, prim0 = first
+    except (TypeError, ValueError):
+        raise ValueError("first must be a pair (depth0, primitive0) of (H, W) arrays") from None
+    z0, prim0 = np.asarray(z0), np.asarray(prim0)
+    if z0.shape != shape or z0.dtype.kind != "f":
+        raise ValueError(f"first's depth must be a float array of the layers' image shape {shape}, "
+                         f"got {z0.dtype} of shape {z0.shape}")
+    if prim0.shape != shape or prim0.dtype.kind not in "iu":
+        raise ValueError(f"first's primitive must be an integer array of the layers' image shape {shape}, "
+                         f"got {prim0.dtype} of shape {prim0.shape}")
+    return z0, prim0
 
 
 def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None,
@@ -271,8 +362,8 @@ def intervals_from_layers(layers: PeeledLayers, *, dtype=np.float64, depth=None,
     dtype : numpy dtype, optional
         Of the intervals.
     depth : (K, H, W) array_like of float, optional
-        The layers' depths at a higher precision than the stored float32 (the renderer passes
-        its float64 depths); default ``layers.depth``.
+        The layers' depths at a higher precision than the stored float32 (e.g. layer 0 from
+        the G-buffer's float64 ``depth``); default ``layers.depth``.
     origin_inside : (H, W) array_like of bool, optional
         Where the first surface leaves a solid: whether the ray's origin (the camera) is inside
         that solid (the renderer asks the mesh, ``trimesh.Trimesh.contains``). Default: True
@@ -345,38 +436,68 @@ def ray_intervals(z, hit, entering, open_surface, origin_inside=None) -> tuple[n
     z = np.maximum.accumulate(np.asarray(z, dtype=np.float64), axis=0)   # rounding never reorders
     front = np.full((K, n), np.inf)
     back = np.full((K, n), np.inf)
+    used = _enter_leave(hit, entering, open_surface, z=z, origin_inside=origin_inside, front=front, back=back)
+    M = max(1, int(used.max()) if n else 1)
+    return front[:M].copy(), back[:M].copy()
+
+
+def interval_count(hit, entering, open_surface) -> np.ndarray:
+    """(n,) int: the intervals the enter/leave rule of :func:`ray_intervals` makes along each
+    of n rays, from the surfaces' kinds alone (the depths do not change the count): the
+    slots M to allocate before the intervals are written.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> interval_count(np.ones((3, 2), bool), np.array([[True, True], [False, True], [True, False]]),
+    ...                np.zeros((3, 2), bool)).tolist()
+    [2, 1]
+    """
+    return _enter_leave(hit, entering, open_surface)
+
+
+def _enter_leave(hit, entering, open_surface, *, z=None, origin_inside=None, front=None, back=None):
+    """The enter/leave rule over the K layers of n rays: the intervals written per ray (n,),
+    and, given the depths ``z`` (K, n) float64 (non-decreasing) and ``front``, ``back``
+    (>= (M, n), +inf), the intervals themselves written into them."""
+    K, n = np.shape(hit)
+    write = z is not None
     used = np.zeros(n, dtype=np.int64)           # intervals written per ray
     inside = np.zeros(n, dtype=bool)
-    start = np.zeros(n)
+    start = np.zeros(n) if write else None
     for k in range(K):
-        zk, h, op = z[k], hit[k], open_surface[k]
+        h, op = hit[k], open_surface[k]
+        zk = z[k] if write else None
         solid = h & ~op
         sheet = np.flatnonzero(h & op & ~inside)                 # [z, z], outside only
-        front[used[sheet], sheet] = zk[sheet]
-        back[used[sheet], sheet] = zk[sheet]
+        if write:
+            front[used[sheet], sheet] = zk[sheet]
+            back[used[sheet], sheet] = zk[sheet]
         used[sheet] += 1
         opening = solid & entering[k] & ~inside
-        start[opening] = zk[opening]
         leave = solid & ~entering[k]
         close = np.flatnonzero(leave & inside)
-        front[used[close], close] = start[close]
-        back[used[close], close] = zk[close]
+        if write:
+            start[opening] = zk[opening]
+            front[used[close], close] = start[close]
+            back[used[close], close] = zk[close]
         used[close] += 1
         stray = leave & ~inside                                   # a leave without its entry
-        extend = np.flatnonzero(stray & (used > 0))
-        back[used[extend] - 1, extend] = zk[extend]
         first = np.flatnonzero(stray & (used == 0))               # no interval before it
-        camera = first if origin_inside is None else first[origin_inside[first]]
-        front[0, first] = zk[first]                                # the entry was here...
-        front[0, camera] = 0.0                                     # ...or the camera is inside
-        back[0, first] = zk[first]
+        if write:
+            extend = np.flatnonzero(stray & (used > 0))
+            back[used[extend] - 1, extend] = zk[extend]
+            camera = first if origin_inside is None else first[origin_inside[first]]
+            front[0, first] = zk[first]                            # the entry was here...
+            front[0, camera] = 0.0                                 # ...or the camera is inside
+            back[0, first] = zk[first]
         used[first] = 1
         inside = (inside | opening) & ~leave
     unseen = np.flatnonzero(inside)                               # the layers ran out inside
-    front[used[unseen], unseen] = start[unseen]
+    if write:
+        front[used[unseen], unseen] = start[unseen]
     used[unseen] += 1
-    M = max(1, int(used.max()) if n else 1)
-    return front[:M].copy(), back[:M].copy()
+    return used
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

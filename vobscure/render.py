@@ -55,12 +55,16 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
 
     Notes
     -----
-    Memory: ``layers=K`` adds to the one-layer G-buffer 9 bytes per pixel per layer for the
-    surfaces (float32 depth, int32 triangle, bool entering; 10 with an open mesh in the scene,
-    whose flag is kept too) and 16 bytes per pixel per interval slot for the float64 intervals
-    (M slots, the most intervals any pixel has: about K / 2 on closed scenes).
-    ``benchmarks/bench_layers.py`` measures the peak (``docs/layers.md``). Time: one more
-    Embree query per layer, on the rays still going.
+    Memory: ``layers=K`` adds to the one-layer G-buffer, per pixel, 1 byte for the first
+    layer (whether the ray enters a solid there: its depth and triangle are the G-buffer's
+    own ``depth`` and ``primitive``, not repeated), 9 bytes for each layer behind it (float32
+    depth, int32 triangle, bool entering; whether a surface is open is made from its
+    triangle) and 8 bytes per interval slot (float32 front and back; M slots, the most
+    intervals any pixel has: about K / 2 on closed scenes). The intervals are made after the
+    peeling, when the bands' temporaries are gone, and are the float64 depths' intervals
+    rounded to float32 (relative 6e-8 of the depth; how the estimators read them:
+    ``docs/layers.md``, "Memory"). ``benchmarks/bench_layers.py`` measures the peak. Time:
+    one more Embree query per layer, on the rays still going.
 
     A surface closer than the tracer's offset (1e-5 of the scene's scale) behind a hit is not
     seen: of two faces that touch (a box standing on a floor) the peeling finds one, which
@@ -117,7 +121,7 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
         hits = scene.tracer.intersect(origins, dirs, threads=1)
         part = _shade(scene, camera, origins, dirs, hits)
         if peel is not None:
-            peel.band(rows.start * W, origins, dirs, hits, part["index"], part["depth"])
+            peel.band(rows.start * W, origins, dirs, hits)
         flat = part["index"] + rows.start * W
         depth[flat] = part.pop("depth")
         normal[flat] = part.pop("normal")
@@ -134,7 +138,7 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
 
     return GBuffer(camera, depth=depth.reshape(H, W), normal=normal.reshape(H, W, 3),
                    valid=valid.reshape(H, W), primitive=primitive.reshape(H, W), hits=hits,
-                   intervals=None if peel is None else peel.intervals(H, W),
+                   intervals=None if peel is None else peel.intervals(depth, primitive, H, W, threads),
                    guard=guard, inner_camera=inner_camera if guard else None)
 
 
@@ -148,51 +152,63 @@ def _widen(camera, guard):
 
 class _Peeling:
     """The layers beyond the first of :func:`render_gbuffer`: per band, the rays continued
-    past their hits K - 1 times, the surfaces stored (float32 depth, int32 triangle, entering,
-    open) and the band's intervals made from its float64 depths."""
+    past their hits K - 1 times and the surfaces stored (layer 0: entering only, its depth
+    and triangle are the G-buffer's; layers 1 to K - 1: float32 depth, int32 triangle,
+    entering); the intervals are made at the end (:meth:`intervals`), in float32."""
 
     def __init__(self, scene, camera, K: int, n: int):
-        self.scene, self.camera, self.K = scene, camera, K
-        self.depth = np.full((K, n), np.inf, dtype=np.float32)
-        self.primitive = np.full((K, n), -1, dtype=np.int32)
+        import threading
+
+        self.scene, self.camera, self.K, self.n = scene, camera, K, n
+        self.depth = np.full((K - 1, n), np.inf, dtype=np.float32)
+        self.primitive = np.full((K - 1, n), -1, dtype=np.int32)
         self.entering = np.zeros((K, n), dtype=bool)
         names = list(scene.meshes)
         open_ids = [names.index(k) for k in scene.open_meshes]
         #: per triangle: whether its mesh bounds no solid (None: every mesh is closed)
         self.open_triangle = np.isin(scene.mesh_index, open_ids) if open_ids else None
-        self.open_surface = np.zeros((K, n), dtype=bool) if open_ids else None
-        self.pieces: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: (n,) bool, made when a first surface leaves a solid whose mesh holds the ray's origin
+        self.origin_inside = None
+        self._lock = threading.Lock()
 
-    def _store(self, k, flat, prim, z, d64, z_band, local):
-        scene = self.scene
-        z_band[k, local] = z
-        self.depth[k, flat] = z
-        self.primitive[k, flat] = prim
+    def _opened(self, prim: np.ndarray) -> np.ndarray:
+        """Whether the surfaces of triangles ``prim`` (-1: none) belong to an open mesh."""
+        if self.open_triangle is None:
+            return np.zeros(prim.shape, dtype=bool)
+        return (prim >= 0) & self.open_triangle[np.maximum(prim, 0)]
+
+    def _store(self, k, flat, prim, z, d64):
         # entering: the winding (outward) normal points against the ray
-        self.entering[k, flat] = np.einsum("ij,ij->i", scene.face_normals[prim], d64) < 0
-        if self.open_surface is not None:
-            self.open_surface[k, flat] = self.open_triangle[prim]
+        self.entering[k, flat] = np.einsum("ij,ij->i", self.scene.face_normals[prim], d64) < 0
+        if k:
+            self.depth[k - 1, flat] = z
+            self.primitive[k - 1, flat] = prim
 
-    def band(self, offset, origins, dirs, hits, local, depth0):
+    def band(self, offset, origins, dirs, hits):
         """Peel a band's rays (flat pixels ``offset`` on) in chunks of :data:`PEEL_RAYS`, so that
         the temporaries are bounded whatever the band's size."""
         from .raytrace import Hits
 
-        z0 = np.full(len(dirs), np.inf)
-        z0[local] = depth0
         for a in range(0, len(dirs), PEEL_RAYS):
             s = slice(a, min(a + PEEL_RAYS, len(dirs)))
             self._chunk(offset + a, origins[s], dirs[s],
-                        Hits(hits.distance[s], hits.primitive[s], hits.barycentric[s]), z0[s])
+                        Hits(hits.distance[s], hits.primitive[s], hits.barycentric[s]))
 
-    def _chunk(self, offset, origins, dirs, hits, z0):
-        from .layers import ray_intervals
-
+    def _chunk(self, offset, origins, dirs, hits):
         scene, camera, tracer = self.scene, self.camera, self.scene.tracer
         n = len(dirs)
-        z_band = np.full((self.K, n), np.inf)
         h = np.flatnonzero(hits.hit)
-        self._store(0, offset + h, hits.primitive[h], z0[h], dirs[h].astype(np.float64), z_band, h)
+        prim0 = hits.primitive[h]
+        self._store(0, offset + h, prim0, None, dirs[h].astype(np.float64))
+        # where the first surface leaves a solid: is the ray's origin inside that solid?
+        leaves = ~self.entering[0, offset + h] & ~self._opened(prim0)
+        if leaves.any():
+            inside = self._origin_inside(origins[h[leaves]], prim0[leaves])
+            if inside.any():
+                with self._lock:
+                    if self.origin_inside is None:
+                        self.origin_inside = np.zeros(self.n, dtype=bool)
+                self.origin_inside[offset + h[leaves][inside]] = True
         going, o, d = np.arange(n), origins, dirs
         for k in range(1, self.K):
             keep = np.flatnonzero(hits.hit)
@@ -208,46 +224,65 @@ class _Peeling:
             n_face = scene.face_normals[prim]
             p = o[h].astype(np.float64) + hits.distance[h, None] * d64
             p -= (np.einsum("ij,ij->i", p, n_face) - scene.plane_offsets[prim])[:, None] * n_face
-            self._store(k, offset + going[h], prim, (p - camera.eye) @ camera.forward, d64, z_band, going[h])
-        opened = None if self.open_surface is None else self.open_surface[:, offset:offset + n]
-        hit = self.primitive[:, offset:offset + n] >= 0
-        entering = self.entering[:, offset:offset + n]
-        opened = np.zeros_like(hit) if opened is None else opened
-        self.pieces[offset] = ray_intervals(z_band, hit, entering, opened,
-                                              self._origin_inside(origins, hit[0] & ~opened[0] & ~entering[0],
-                                                                  self.primitive[0, offset:offset + n]))
+            self._store(k, offset + going[h], prim, (p - camera.eye) @ camera.forward, d64)
 
-    def _origin_inside(self, origins, first_leaves, prim) -> np.ndarray:
-        """(n,) bool: where the first surface leaves a solid, whether the ray's origin is inside
-        that surface's mesh (trimesh's ``contains``, once per distinct origin and mesh)."""
-        out = np.zeros(len(first_leaves), dtype=bool)
-        rays = np.flatnonzero(first_leaves)
-        if not len(rays):
-            return out
+    def _origin_inside(self, origins, prim) -> np.ndarray:
+        """(n,) bool: whether each ray's origin is inside the mesh of its first surface's
+        triangle ``prim`` (trimesh's ``contains``, once per distinct origin and mesh)."""
+        out = np.zeros(len(prim), dtype=bool)
         names = list(self.scene.meshes)
-        mesh = self.scene.mesh_index[prim[rays]]
+        mesh = self.scene.mesh_index[prim]
         for m in np.unique(mesh):
-            sel = rays[mesh == m]
+            sel = np.flatnonzero(mesh == m)
             points, which = np.unique(np.asarray(origins[sel], dtype=np.float64), axis=0, return_inverse=True)
             out[sel] = self.scene.meshes[names[m]].contains(points)[which.reshape(-1)]
         return out
 
-    def intervals(self, H, W):
-        from .layers import PeeledLayers, SolidIntervals
+    def _kinds(self, s: slice, primitive0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(hit, entering, open) (K, c) of the pixels ``s``."""
+        prim = np.concatenate([primitive0[None, s], self.primitive[:, s]])
+        hit = prim >= 0
+        return hit, self.entering[:, s], self._opened(prim)
+
+    def intervals(self, depth0, primitive0, H, W, threads):
+        """The :class:`~vobscure.layers.SolidIntervals` of the stored layers, float32, with the
+        layers attached; ``depth0``, ``primitive0`` (H * W,): the G-buffer's own images.
+
+        Made after the peeling, when the bands' temporaries are gone, in two passes over
+        chunks of :data:`PEEL_RAYS` pixels: the interval count of every pixel (the slots M),
+        then the intervals, written straight into the (M, H, W) float32 images. Rounding to
+        float32 commutes with the rule (it only takes maxima of the depths and copies them),
+        so these are the float64 intervals of the same surfaces rounded to float32.
+        """
+        from .layers import PeeledLayers, SolidIntervals, interval_count, ray_intervals
+        from .raytrace import parallel_map
 
         K, n = self.K, H * W
-        M = max(f.shape[0] for f, _ in self.pieces.values())
-        front = np.full((M, n), np.inf)
-        back = np.full((M, n), np.inf)
-        for offset in sorted(self.pieces):
-            f, b = self.pieces.pop(offset)
-            front[:f.shape[0], offset:offset + f.shape[1]] = f
-            back[:b.shape[0], offset:offset + b.shape[1]] = b
-        layers = PeeledLayers(self.depth.reshape(K, H, W), self.primitive.reshape(K, H, W),
+        chunks = [slice(a, min(a + PEEL_RAYS, n)) for a in range(0, n, PEEL_RAYS)]
+
+        def count(s):
+            return int(interval_count(*self._kinds(s, primitive0)).max(initial=1))
+
+        M = max(parallel_map(count, chunks, threads=threads), default=1)
+        front = np.full((M, n), np.inf, dtype=np.float32)
+        back = np.full((M, n), np.inf, dtype=np.float32)
+        inside = self.origin_inside
+
+        def fill(s):
+            hit, entering, opened = self._kinds(s, primitive0)
+            z = np.empty((K, s.stop - s.start))
+            z[0] = depth0[s]
+            z[1:] = self.depth[:, s]
+            f, b = ray_intervals(z, hit, entering, opened, np.zeros(len(z[0]), bool) if inside is None else inside[s])
+            front[:len(f), s] = f
+            back[:len(b), s] = b
+
+        parallel_map(fill, chunks, threads=threads)
+        layers = PeeledLayers(self.depth.reshape(K - 1, H, W), self.primitive.reshape(K - 1, H, W),
                               self.entering.reshape(K, H, W), face_normals=self.scene.face_normals,
-                              rotation=self.camera.rotation,
-                              open_surface=None if self.open_surface is None else self.open_surface.reshape(K, H, W))
-        return SolidIntervals(front.reshape(M, H, W), back.reshape(M, H, W), layers=layers)
+                              rotation=self.camera.rotation, first=(depth0.reshape(H, W), primitive0.reshape(H, W)),
+                              open_triangle=self.open_triangle)
+        return SolidIntervals(front.reshape(M, H, W), back.reshape(M, H, W), dtype=np.float32, layers=layers)
 
 
 def _shade(scene, camera, origins, dirs, hits) -> dict:

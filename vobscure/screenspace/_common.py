@@ -765,14 +765,22 @@ def interval_slots(intervals):
 
 def inside_intervals(intervals, index: np.ndarray, z: np.ndarray) -> np.ndarray:
     """(k,) bool: view depth ``z`` lies inside a solid interval of the pixel ``index``,
-    front < z < back.
+    front < z < back, ``z`` compared in the intervals' precision.
 
     Strict, as the depth test z > d of a single depth buffer: the intervals ``[d, +inf)``
-    then give that test bit for bit (an interval's ends have measure zero). One gather per
-    interval slot: the cost is linear in the slots M.
+    then give that test bit for bit (an interval's ends have measure zero). The renderer's
+    intervals are float32 (``docs/layers.md``, "Memory"): their ends are the float64 depths
+    rounded to float32 (relative error at most 2^-24, 6e-8), and ``z`` is rounded to float32
+    too before the comparison, so that a sample at the very depth of the pixel's surface
+    (z = d) stays outside, as the depth test has it; only a depth within that rounding of an
+    end may read the other side (a set of measure zero). float64 intervals compare ``z`` as
+    it is. One gather per interval slot: the cost is linear in the slots M.
     """
     front, back = interval_slots(intervals)
     z = np.asarray(z)
+    if front.dtype.itemsize < z.dtype.itemsize:
+        with np.errstate(over="ignore"):      # beyond float32's range: +-inf, as far as any end
+            z = z.astype(front.dtype)
     out = np.zeros(z.shape, dtype=bool)
     for m in range(intervals.count):
         out |= (front[m].take(index) < z) & (z < back[m].take(index))
@@ -789,16 +797,28 @@ def interval_back(intervals, index: np.ndarray, d: np.ndarray) -> np.ndarray:
     from ``d`` on, as a single depth buffer takes it). ``d`` itself (no interval at or behind
     it: an interpolated depth between a thin surface and the background behind it) makes
     the occluder a surface of no thickness.
+
+    ``d`` is compared in the intervals' precision: with the renderer's float32 intervals
+    (``docs/layers.md``, "Memory") a zero-thickness interval ``[d, d]`` of an open surface,
+    whose end is ``d`` rounded to float32 and may lie below ``d``, is still the one found, and
+    the back returned is at least ``d`` (an interval ending within that rounding, 6e-8 of the
+    depth, before ``d`` then gives ``d``). float64 intervals compare ``d`` as it is.
     """
     front, back = interval_slots(intervals)
     d = np.asarray(d, dtype=np.float64)
+    d_cmp = d
+    if back.dtype.itemsize < d.dtype.itemsize:
+        with np.errstate(over="ignore"):      # beyond float32's range: +-inf, as far as any end
+            d_cmp = d.astype(back.dtype)
     out = d.copy()
     found = np.zeros(d.shape, dtype=bool)
     for m in range(intervals.count):
         f = front[m].take(index)
         b = back[m].take(index)
         # a slot is an interval when its front is finite (unused slots are +inf, +inf)
-        first = ~found & (b >= d) & (f < np.inf)
+        first = ~found & (b >= d_cmp) & (f < np.inf)
         out[first] = b[first]
         found |= first
+    if d_cmp is not d:
+        np.maximum(out, d, out=out)
     return out
