@@ -20,7 +20,12 @@ its suggested camera, 512 x 512 (128 x 128 with ``--quick``), on every usable co
   G-buffer (the surfaces, ``PeeledLayers.nbytes``, and the intervals' float32 slots) per
   pixel beside it;
 - **coverage**: the interval slots M, and the fraction of covered pixels whose last interval
-  is still open after K layers (its end unseen: the ray crossed at least K surfaces).
+  is still open after K layers (its end unseen: the ray crossed at least K surfaces);
+- **the estimators that read the layers** (``thickness="layers"``: ``vo_line`` 9 lines,
+  ``vo_point`` 16 points, ``gtao`` and ``vbao`` at their defaults) on the G-buffers of K = 2, 4,
+  8: time against K = 2, beside K / 2 (goal: at most linear in K, ratio <= K / 2) and beside
+  the interval slots' ratio M(K) / M(2) (what the estimators loop over); the same estimator
+  without layers (the depth buffer) for scale.
 
 Run from the repository root::
 
@@ -94,7 +99,36 @@ def main(argv=None) -> int:
                 spread = (max(calls[K]) - min(calls[K])) / pixels
                 report.row(name, K, times[K], ratio, peaks[K] / pixels, spread, extra, held, M, unseen)
 
+            bench_estimators(name, {K: times[K].result for K in LAYERS}, args.repeats, report)
+
     return _bench.run(body, Report())
+
+
+#: The layered estimators timed against K, with the options they are run with.
+ESTIMATORS = {"vo_line:9": (vo.vo_line, dict(samples=9)), "vo_point:16": (vo.vo_point, dict(samples=16)),
+              "gtao": (vo.gtao, {}), "vbao": (vo.vbao, {})}
+
+
+def bench_estimators(name, gbuffers, repeats, report):
+    """Time of each layered estimator on the G-buffers of K = 2, 4, 8 against K = 2."""
+    radius = vo.experiments.compare.choose_radius(vo.scenes.get(name), gbuffers[1]).radius
+    layered = [K for K in LAYERS if K > 1]
+    print(f"\n  {name}: estimators with thickness='layers', radius {radius:.4g} (best of {repeats})")
+    print(f"  {'estimator':<12} {'K':>2} {'M':>3} {'seconds':>9} {'x K=2':>7} {'K/2':>5} {'M/M(2)':>7}")
+    for label, (fn, options) in ESTIMATORS.items():
+        calls = {"solid": lambda: fn(gbuffers[1], radius=radius, **options)}
+        calls.update({K: (lambda K=K: fn(gbuffers[K], radius=radius, thickness="layers", **options))
+                      for K in layered})
+        t = _bench.interleaved(calls, repeats)
+        print(f"  {label:<12} {'':>2} {'':>3} {t['solid'].seconds:9.4f}   (the depth buffer, no layers)")
+        M2 = gbuffers[2].intervals.count
+        for K in layered:
+            ratio = t[K].seconds / t[2].seconds
+            M = gbuffers[K].intervals.count
+            print(f"  {label:<12} {K:>2} {M:>3} {t[K].seconds:9.4f} {ratio:7.2f} {K / 2:5.1f} {M / M2:7.2f}")
+            if K > 2:
+                report.goal(f"{name}: {label} time K={K} / K=2 (at most K/2 = {K // 2})", ratio, K / 2,
+                            at_least=False)
 
 
 if __name__ == "__main__":
