@@ -187,7 +187,7 @@ def plane_labels(gbuffer) -> np.ndarray | None:
     """(H, W) int64 label of the world plane each pixel's flat triangle lies in, 0 where the
     pixel is background or its shading normal is not the triangle's (smooth shading); None when
     the G-buffer has no per-hit data (:meth:`vobscure.GBuffer.from_arrays`: its planes are
-    known only to the depth's precision).
+    known only to the depth's precision) or its per-hit data lack the world positions and normals.
 
     Pixels share a label when their triangles' planes (unit normal n, offset n . x) agree
     within :data:`PLANE_KEY_QUANTUM` (relative): coplanar triangles of a wall, not its
@@ -197,6 +197,8 @@ def plane_labels(gbuffer) -> np.ndarray | None:
     if getattr(gbuffer, "_hit_source", None) is None:
         return None
     hits = gbuffer.hits
+    if not {"index", "world_geometric_normal", "world_normal", "world_position"} <= set(hits):
+        return None         # per-hit data without the planes (a G-buffer built by hand)
     index = np.asarray(hits["index"])
     n = np.asarray(hits["world_geometric_normal"], dtype=np.float64)
     flat = (np.asarray(hits["world_normal"]) == n).all(axis=1)
