@@ -460,3 +460,21 @@ def test_the_sweep_keeps_one_gbuffer_per_layer_count():
     first = results[2].gbuffer
     for r in results:
         np.testing.assert_array_equal(r.gbuffer.depth, first.depth)   # the first layer is the plain G-buffer
+
+
+def test_verdict_ranks_layered_rows_against_their_own_reference_only():
+    """A row with thickness "layers" has another model than the single-depth screen-space VO:
+    however close it comes to it, it is not in the sampling-error ranking nor split by cause."""
+    terms = dict(sampling=0.01, screen=0.02, model=0.1)
+    layered = dict(_r("line:5", 0.004, 5, 0.05, **terms), quantity="ball VO", screen_rmse=0.01, thickness="layers")
+    plain = dict(_r("area:1", 0.002, 1, 0.30, sampling=0.05, screen=0.25, model=0.1), quantity="ball VO",
+                 screen_rmse=0.05, thickness=None)
+    v = C.verdict([layered, plain])
+    own = next(g for g in v["groups"] if g["error"] == "own_rmse")
+    (sampling,) = [g for g in v["groups"] if g["error"] == "screen_rmse"]
+    assert own["best"] == "line:5" and sampling["best"] == "area:1" and sampling["front_taps"] == ["area:1"]
+    assert [d["label"] for d in v["dominant"]] == ["area:1"]
+    # without the mark the same row leads both
+    v = C.verdict([dict(layered, thickness=None), plain])
+    assert next(g for g in v["groups"] if g["error"] == "screen_rmse")["best"] == "line:5"
+    assert [d["label"] for d in v["dominant"]] == ["line:5"]
