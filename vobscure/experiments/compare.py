@@ -19,7 +19,10 @@ Pareto front in time and in taps, the cheapest configuration that meets a target
 best that fits a time budget, which error term dominates and what measurably reduces it (for
 the screen-space term, the thickness model is tried at a few thicknesses), and the error in the
 thin-feature band (:func:`vobscure.metrics.thin_feature_mask`: just behind silhouettes, where
-halos live) beside the whole frame's.
+halos live) beside the whole frame's (the verdict's text is :mod:`vobscure.experiments.verdict`).
+With ``thickness="layers"`` the G-buffer is depth-peeled to ``layers`` surfaces a pixel and
+the methods whose registry entry reads layers (:attr:`vobscure.methods.Method.thickness_kinds`)
+take their thickness from its solid intervals; the verdict says which did.
 
 Outputs (all written atomically into ``out``): ``results.csv``, ``results.md`` (verdict, then
 the table), ``summary.json`` (the verdict as data), ``tradeoff.png`` (error against time, taps
