@@ -396,8 +396,9 @@ class SweepResult:
         return {**self.__dict__, "gbuffer": None}
 
     def as_row(self) -> dict:
-        """A flat record for tables: the configuration, the costs, ``<stat>_<reference>`` for
-        every reference and statistic of :data:`ERROR_STATS`, and the decomposition's
+        """A flat record for tables: the configuration (``thickness`` the one the method ran
+        with, :attr:`SweepConfig.method_thickness`; ``layers`` K when it read them), the costs,
+        ``<stat>_<reference>`` for every reference and statistic of :data:`ERROR_STATS`, and the decomposition's
         ``<term>_<stat>`` columns (with ``decomposition_target``)."""
         c = self.config
         row = {
