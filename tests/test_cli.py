@@ -193,3 +193,38 @@ def test_gbuffer_with_eye_is_a_clean_error(tmp_path, capsys):
     assert cli.main(["compare", "--gbuffer", str(path), "--fov", "40", "--eye", "0", "0", "1",
                      "--out", str(tmp_path)]) == 2
     assert "--gbuffer brings its own view" in capsys.readouterr().err
+
+
+def test_compare_thickness_layers_parses_and_runs(tmp_path):
+    args = cli._parser().parse_args(["compare", "--thickness", "layers", "--layers", "2"])
+    assert (args.thickness, args.layers) == ("layers", 2)
+    args = cli._parser().parse_args(["compare", "--thickness", "0.25"])
+    assert (args.thickness, args.layers) == (0.25, None)
+    out = tmp_path / "out"
+    assert cli.main(["compare", "--scene", "thin_occluders", "--size", "12", "12", "--methods", "line:5,area:1",
+                     "--thickness", "layers", "--layers", "2", "--reference", "screen", "--quick", "--no-cache",
+                     "--no-suggest", "--out", str(out), "--quiet"]) == 0
+    prov = json.loads((out / "provenance.json").read_text())
+    assert prov["thickness"] == "layers" and prov["layers"] == 2
+    assert "G-buffer with 2 layers" in [s["stage"] for s in prov["stages"]]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--thickness", "fat"], "argument --thickness: must be a positive number (the thickness model, world units) "
+                             "or 'layers'"),
+    (["--thickness", "-0.5"], "argument --thickness: must be a positive number"),
+    (["--thickness", "layers", "--layers", "0"], "argument --layers: must be an integer >= 2"),
+    (["--thickness", "layers", "--layers", "two"], "argument --layers: must be an integer >= 2"),
+])
+def test_compare_bad_thickness_or_layers_is_an_argparse_error(tmp_path, capsys, args, message):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["compare", "--scene", "slab", "--out", str(tmp_path), "--quiet", *args])
+    assert exc.value.code == 2 and message in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_compare_layers_without_thickness_layers_is_a_clean_error(tmp_path, capsys):
+    assert cli.main(["compare", "--scene", "slab", "--size", "8", "8", "--layers", "3", "--out", str(tmp_path),
+                     "--quiet"]) == 2
+    assert "give thickness='layers' (--thickness layers)" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())

@@ -332,3 +332,149 @@ def test_thin_feature_band_is_reported_beside_the_whole_frame(tmp_path):
     assert f"{row['own_thin_rmse']:.4f}" in sentence and f"{row['own_rmse']:.4f}" in sentence
     csv_row, = _rows(tmp_path / "results.csv")
     assert float(csv_row["own_thin_rmse"]) == pytest.approx(row["own_thin_rmse"], rel=1e-12)
+
+
+# --------------------------------------------------------------------------- thickness from layers
+#: The methods of the layered comparison: four that read layers, two that do not.
+LAYERED_METHODS = "point:12,line:5,gtao:2,vbao:2,area:1,sao:8"
+#: Their registry's answer, written out by hand: which read thickness="layers".
+READS_LAYERS = {"point": True, "line": True, "gtao": True, "vbao": True, "area": False, "sao": False}
+
+
+@pytest.fixture(scope="module")
+def layered_runs(tmp_path_factory):
+    """The thin-occluder scene at 24 x 24 with and without thickness="layers" (K = 2), sharing a
+    reference cache: thin legs, bars and a sheet in front of a floor and a wall."""
+    base = tmp_path_factory.mktemp("layers")
+    kw = dict(size=(24, 24), methods=LAYERED_METHODS, quick=True, suggest=False, repeats=1,
+              cache=base / "cache", references=("screen", "volumetric", "ao", "obscurance"))
+    with_layers = C.compare("thin_occluders", thickness="layers", layers=2, out=base / "layers", **kw)
+    without = C.compare("thin_occluders", out=base / "plain", plots=False, **kw)
+    return with_layers, without, base / "layers"
+
+
+def test_thickness_layers_reaches_the_methods_that_read_layers(layered_runs):
+    res, plain, _ = layered_runs
+    scene = vo.scenes.thin_occluders()
+    camera = vo.Camera.from_dict(res.provenance["camera"])
+    layered_gb = vo.render_gbuffer(scene, camera, layers=2)
+    for row, base in zip(res.rows, plain.rows):
+        reads = READS_LAYERS[row["method"]]
+        assert row["thickness"] == ("layers" if reads else None) and row["layers"] == (2 if reads else 0)
+        key = (row["radius"], row["label"])
+        image, image_plain = res.images[key], plain.images[key]
+        if reads:
+            # the legs, bars and sheet are seen: the layers open what a depth buffer closes
+            assert np.nanmax(np.abs(image - image_plain)) > 0.1, row["label"]
+            assert "sampling_error_rmse" not in row        # no split by cause against the single-depth VO
+        else:
+            np.testing.assert_array_equal(image, image_plain)   # runs as without a thickness
+            assert "sampling_error_rmse" in row
+    # an independent call on a G-buffer peeled to K = 2 gives the same images, bit for bit
+    radius = res.rows[0]["radius"]
+    np.testing.assert_array_equal(res.images[(radius, "line:5")],
+                                  vo.vo_line(layered_gb, radius=radius, samples=5, thickness="layers", seed=0))
+    np.testing.assert_array_equal(res.images[(radius, "gtao:2")],
+                                  vo.gtao(layered_gb, radius=radius, slices=2, steps=3, thickness="layers", seed=0))
+    # the references read no layers: the same entries of the cache serve both runs
+    assert all(all(h.values()) for h in plain.provenance["cache_hits"].values())
+    for name, image in res.references[radius].items():
+        np.testing.assert_array_equal(image, plain.references[radius][name])
+
+
+def test_thickness_layers_is_recorded_and_explained(layered_runs):
+    res, plain, out = layered_runs
+    prov = json.loads((out / "provenance.json").read_text())
+    assert prov["thickness"] == "layers" and prov["layers"] == 2 and plain.provenance["layers"] is None
+    (stage,) = [s for s in prov["stages"] if s["stage"].startswith("G-buffer with")]
+    assert stage["stage"] == "G-buffer with 2 layers" and stage["seconds"] > 0 and stage["status"] == "computed"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["layers"]["with_layers"] == ["point:12", "line:5", "gtao:2", "vbao:2"]
+    assert summary["layers"]["without_layers"] == ["area:1", "sao:8"]
+    (sentence,) = [t for t in summary["text"] if t.startswith("Thickness from layers")]
+    assert "K = 2" in sentence and "area:1, sao:8 take no layers" in sentence and "'screen') has no layers" in sentence
+    # the sampling-error ranking against the single-depth screen-space VO holds no layered row
+    (sampling,) = [g for g in summary["groups"] if g["error"] == "screen_rmse"]
+    assert sampling["best"] == "area:1" and sampling["front_time"] == ["area:1"]
+    assert all(d["label"] == "area:1" for d in summary["dominant"])
+    md = (out / "results.md").read_text()
+    assert "thickness: layers (K = 2" in md and "| label | thickness | layers |" in md
+    rows = _rows(out / "results.csv")
+    assert [(r["thickness"], r["layers"]) for r in rows] == [("layers", "2")] * 4 + [("", "0")] * 2
+    # with the layers the thin geometry stops darkening what lies behind it
+    line, line_plain = (next(r for r in x.rows if r["label"] == "line:5") for x in (res, plain))
+    assert line["volumetric_rmse"] < 0.5 * line_plain["volumetric_rmse"]
+
+
+def test_a_numeric_thickness_still_does_not_reach_gtao(tmp_path):
+    """GTAO takes only the layers as its thickness: with a number the row says it ran without,
+    and its image is the one without a thickness; the lines take the number."""
+    kw = dict(size=(16, 16), methods="gtao:2,line:5", references=("screen",), quick=True, cache=False,
+              write=False, suggest=False, radii=0.4)
+    res, plain = C.compare("crease", thickness=0.2, **kw), C.compare("crease", **kw)
+    gtao, line = res.rows
+    assert gtao["thickness"] is None and gtao["layers"] == 0 and line["thickness"] == 0.2
+    np.testing.assert_array_equal(res.images[(0.4, "gtao:2")], plain.images[(0.4, "gtao:2")])
+    assert not np.array_equal(res.images[(0.4, "line:5")], plain.images[(0.4, "line:5")])
+
+
+def test_layers_options_are_checked(tmp_path):
+    kw = dict(size=(8, 8), methods="line:5", references=("screen",), quick=True, cache=False, write=False)
+    with pytest.raises(ValueError, match="thickness must be a positive number .* or 'layers'.*'fat'"):
+        C.compare("slab", thickness="fat", **kw)
+    with pytest.raises(ValueError, match="layers must be an integer >= 2, got 1"):
+        C.compare("slab", thickness="layers", layers=1, **kw)
+    with pytest.raises(ValueError, match="only thickness='layers' reads"):
+        C.compare("slab", layers=3, **kw)
+    gb = vo.render_gbuffer(vo.scenes.slab(), vo.scenes.slab().camera((8, 8)))
+    with pytest.raises(ValueError, match="gbuffer.intervals is None"):
+        C.compare(gb, thickness="layers", **kw)
+
+
+def test_a_frame_with_intervals_reads_its_own_layers(tmp_path):
+    scene = vo.scenes.thin_occluders()
+    gb = vo.render_gbuffer(scene, scene.camera((16, 16)), layers=2)
+    res = C.compare(gb, methods="line:5,area:1", thickness="layers", quick=True, cache=False, write=False,
+                    radii=0.5)
+    line, area = res.rows
+    assert (line["thickness"], area["thickness"]) == ("layers", None) and res.provenance["layers"] is None
+    np.testing.assert_array_equal(res.images[(0.5, "line:5")],
+                                  vo.vo_line(gb, radius=0.5, samples=5, thickness="layers", seed=0))
+    assert any("the G-buffer's own solid intervals" in t and "'screen' is also their own reference" in t
+               for t in res.summary["text"])
+
+
+def test_the_sweep_keeps_one_gbuffer_per_layer_count():
+    """The sweep's G-buffer of a view is keyed by its layer count too: K = 2 and K = 3 of one
+    view are two renders, and the one-layer G-buffer a third."""
+    from vobscure.experiments import InlineExecutor, SweepConfig, sweep
+
+    common = dict(scene="thin_occluders", method="line", samples=5, size=(12, 12), radius=0.5,
+                  references=("screen",), screen_samples=16, repeats=0)
+    configs = [SweepConfig(thickness="layers", layers=2, **common), SweepConfig(thickness="layers", layers=3, **common),
+               SweepConfig(**common), SweepConfig(thickness="layers", **common)]
+    results = sweep(configs, executor=InlineExecutor(), keep_images=True)
+    peeled = [None if r.gbuffer.intervals is None else r.gbuffer.intervals.layers.depth.shape[0] for r in results]
+    assert peeled == [2, 3, None, 4]          # K = 4 by default with thickness="layers"
+    assert [r.as_row()["layers"] for r in results] == [2, 3, None, 4]
+    first = results[2].gbuffer
+    for r in results:
+        np.testing.assert_array_equal(r.gbuffer.depth, first.depth)   # the first layer is the plain G-buffer
+
+
+def test_verdict_ranks_layered_rows_against_their_own_reference_only():
+    """A row with thickness "layers" has another model than the single-depth screen-space VO:
+    however close it comes to it, it is not in the sampling-error ranking nor split by cause."""
+    terms = dict(sampling=0.01, screen=0.02, model=0.1)
+    layered = dict(_r("line:5", 0.004, 5, 0.05, **terms), quantity="ball VO", screen_rmse=0.01, thickness="layers")
+    plain = dict(_r("area:1", 0.002, 1, 0.30, sampling=0.05, screen=0.25, model=0.1), quantity="ball VO",
+                 screen_rmse=0.05, thickness=None)
+    v = C.verdict([layered, plain])
+    own = next(g for g in v["groups"] if g["error"] == "own_rmse")
+    (sampling,) = [g for g in v["groups"] if g["error"] == "screen_rmse"]
+    assert own["best"] == "line:5" and sampling["best"] == "area:1" and sampling["front_taps"] == ["area:1"]
+    assert [d["label"] for d in v["dominant"]] == ["area:1"]
+    # without the mark the same row leads both
+    v = C.verdict([dict(layered, thickness=None), plain])
+    assert next(g for g in v["groups"] if g["error"] == "screen_rmse")["best"] == "line:5"
+    assert [d["label"] for d in v["dominant"]] == ["line:5"]

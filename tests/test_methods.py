@@ -384,3 +384,56 @@ def test_compare_runs_the_baselines_against_their_own_references():
         assert np.isfinite(r["own_rmse"])
     groups = {g["reference"] for g in res.summary["groups"]}
     assert {"ao", "ao_uniform", "volumetric", "screen", "obscurance"} <= groups
+
+
+# --------------------------------------------------------------------------- the thickness kinds
+def test_the_registry_declares_which_methods_read_layers():
+    """Written out by hand from docs/screenspace.md ("Thickness from layers", "VBAO"): the VO
+    point and line estimators, GTAO and VBAO read layers; area sampling and the converged
+    reference take only a constant thickness; GTAO no constant; the obscurance and HBAO
+    baselines none."""
+    expected = {"point": ("constant", "layers"), "line": ("constant", "layers"), "area": ("constant",),
+                "reference": ("constant",), "gtao": ("layers",), "vbao": ("constant", "layers"),
+                "vbao_uniform": ("constant", "layers"), "hbao": (), "alchemy": (), "sao": ()}
+    for name, kinds in expected.items():
+        m = methods.get(name)
+        assert m.thickness_kinds == kinds, name
+        assert m.takes_thickness("layers") == ("layers" in kinds)
+        assert m.takes_thickness(0.3) == ("constant" in kinds)
+
+
+def test_run_passes_a_thickness_only_of_a_kind_the_method_takes():
+    scene = vo.scenes.thin_occluders()
+    layered = vo.render_gbuffer(scene, scene.camera((12, 12)), layers=2)
+    kw = dict(radius=0.5, seed=1)
+    np.testing.assert_array_equal(methods.Config("line", 5).run(layered, thickness="layers", **kw),
+                                  vo.vo_line(layered, samples=5, thickness="layers", **kw))
+    np.testing.assert_array_equal(methods.Config("vbao", 2).run(layered, thickness="layers", **kw),
+                                  vo.vbao(layered, slices=2, steps=methods.VBAO_STEPS, thickness="layers", **kw))
+    # area sampling takes no layers: it runs as without a thickness (vo_area itself refuses "layers")
+    np.testing.assert_array_equal(methods.Config("area", 1).run(layered, thickness="layers", **kw),
+                                  vo.vo_area(layered, samples=1, **kw))
+    with pytest.raises(ValueError, match="thickness"):
+        vo.vo_area(layered, thickness="layers", **kw)
+    # GTAO takes the layers, and no number (vo.gtao itself refuses one)
+    np.testing.assert_array_equal(methods.Config("gtao", 2).run(layered, thickness="layers", **kw),
+                                  vo.gtao(layered, slices=2, thickness="layers", **kw))
+    np.testing.assert_array_equal(methods.Config("gtao", 2).run(layered, thickness=0.2, **kw),
+                                  vo.gtao(layered, slices=2, **kw))
+
+
+def test_thickness_kinds_are_validated_and_default_to_the_signature():
+    def with_thickness(gbuffer, *, radius, samples=1, thickness=None):
+        return np.ones(gbuffer.valid.shape)
+
+    def without(gbuffer, *, radius, samples=1):
+        return np.ones(gbuffer.valid.shape)
+
+    assert methods.Method("t", with_thickness, default_samples=1, fetch="nearest").thickness_kinds == ("constant",)
+    assert methods.Method("n", without, default_samples=1, fetch="nearest").thickness_kinds == ()
+    assert methods.Method("l", with_thickness, default_samples=1, fetch="nearest",
+                          thickness_kinds="layers").thickness_kinds == ("layers",)
+    with pytest.raises(ValueError, match="thickness_kinds must be some of constant, layers, got 'fat'"):
+        methods.Method("f", with_thickness, default_samples=1, fetch="nearest", thickness_kinds=("fat",))
+    with pytest.raises(ValueError, match="needs a function that takes the keyword thickness"):
+        methods.Method("w", without, default_samples=1, fetch="nearest", thickness_kinds=("layers",))

@@ -91,7 +91,13 @@ def _parser() -> argparse.ArgumentParser:
                         f"{', '.join(methods.names())} (listed below; default point:12,point:33,line:5,line:9,area:1, plus the vegetation models on a "
                         "vegetation scene)")
     c.add_argument("--normals", action="store_true", help="normal clamp (half-ball VO, Sec. 4.4)")
-    c.add_argument("--thickness", type=float, default=None, help="thickness model (Sec. 4.3), world units")
+    c.add_argument("--thickness", type=_thickness_arg, default=None, metavar="T|layers",
+                   help="a number: the thickness model (Sec. 4.3) in world units, for every method that takes one; "
+                        "'layers': render the G-buffer with --layers depth-peeled layers and let every method that "
+                        "reads them (point, line, gtao, vbao) take the true thickness from them, the others run "
+                        "without (docs/compare.md)")
+    c.add_argument("--layers", type=_layers_arg, default=None, metavar="K",
+                   help="depth-peeled layers of the G-buffer with --thickness layers (an integer >= 2, default 4)")
     c.add_argument("--reference", nargs="+", default=None, choices=references.names(), metavar="NAME",
                    help=f"references to compute, some of {', '.join(references.names())} (listed below; default "
                         "screen volumetric ao, and each method's own; on a scene that is not closed, shell in "
@@ -181,6 +187,31 @@ def _view_camera(args, size, scene_spec):
         raise ValueError(f"--eye/--target/--up: {exc}") from exc
 
 
+def _thickness_arg(text: str):
+    """``--thickness``: a positive number or ``layers``."""
+    if text == "layers":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number (the thickness model, world units) or 'layers' "
+                                         f"(the depth-peeled layers' solid intervals), got {text!r}")
+    return value
+
+
+def _layers_arg(text: str) -> int:
+    """``--layers``: an integer >= 2."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 2 (the depth-peeled layers K), got {text!r}")
+    return value
+
+
 def _camera_arg(spec: str, size):
     from .camera import Camera
 
@@ -216,7 +247,7 @@ def _compare_main(args) -> int:
         camera = _view_camera(args, size, args.scene)
         camera = _camera_arg(args.camera, size) if camera is None and args.camera else camera
     result = compare(scene, name=name, camera=camera, size=size, radii=args.radius,
-                     methods=args.methods, normal_clamp=args.normals, thickness=args.thickness,
+                     methods=args.methods, normal_clamp=args.normals, thickness=args.thickness, layers=args.layers,
                      references=tuple(args.reference) if args.reference else None,
                      repeats=args.repeats, rays=args.rays, volume_samples=args.volume_samples,
                      screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit,

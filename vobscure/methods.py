@@ -8,7 +8,10 @@ Each entry (:class:`Method`) says what a method is and what it costs:
   ``texels(n)``, the texels those taps read (the cost model of DESIGN.md);
 - the quantity it estimates (:data:`QUANTITIES`: ball VO, half-ball VO, cosine AO,
   obscurance, ..., taken from the reference registry :mod:`vobscure.references`) and so the
-  reference it is compared with.
+  reference it is compared with;
+- the kinds of ``thickness`` it takes (:data:`THICKNESS_KINDS`: a constant thickness, the
+  solid intervals of a layered G-buffer, ``thickness="layers"``), so that an experiment can
+  pass every method the same ``thickness`` and each gets it only when it takes that kind.
 
 :meth:`Method.run` returns the (H, W) image and passes the function the options it takes
 (:func:`filter_options`); :meth:`Method.estimate` gives the standard error of a method that
@@ -30,6 +33,8 @@ Examples
 (32, 128, 'half-ball VO', 'volumetric')
 >>> [c.label for c in methods.parse("line:9, point:12:nearest")]
 ['line:9', 'point:12:nearest']
+>>> [n for n in methods.names() if methods.get(n).takes_thickness("layers")]
+['point', 'line', 'gtao', 'vbao', 'vbao_uniform']
 """
 
 from __future__ import annotations
@@ -48,14 +53,34 @@ from .screenspace import alchemy, gtao, hbao, point_taps, sao, vbao, vo_area, vo
 from .screenspace import crop_guard, inner_shape
 from .trees.pixels import hegeman_gbuffer, poisson_gbuffer, reeves_blau_gbuffer
 
-__all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "register", "get", "names",
-           "parse", "unregister", "filter_options"]
+__all__ = ["Method", "Config", "Quantity", "QUANTITIES", "TEXELS_PER_TAP", "THICKNESS_KINDS", "register", "get",
+           "names", "parse", "unregister", "filter_options", "thickness_kind"]
 
 #: Depth texels one tap reads with each fetch: a nearest fetch reads one texel, a bilinear
 #: fetch 2 x 2; ``vo_area``'s mip-map lookup reads two levels of 2 x 2 (trilinear) or 3 x 3
 #: (its default quadratic B-spline) texels; ``"none"``: an object-space model that reads no
 #: depth buffer.
 TEXELS_PER_TAP = {"nearest": 1, "bilinear": 4, "trilinear": 8, "bspline": 18, "none": 0}
+
+#: The kinds of ``thickness`` a method can take: ``"constant"``, a positive number (the thickness
+#: model of Loos & Sloan 2010, Sec. 4.3; VBAO's constant thickness), and ``"layers"``, the solid
+#: intervals of a layered G-buffer (``render_gbuffer(..., layers=K)``, ``docs/layers.md``).
+THICKNESS_KINDS = ("constant", "layers")
+
+
+def thickness_kind(thickness) -> str | None:
+    """The kind (:data:`THICKNESS_KINDS`) of a ``thickness`` option: None for None (no
+    thickness: every surface solid behind its depth), ``"layers"`` for ``"layers"``,
+    ``"constant"`` for anything else (the function checks the number).
+
+    Examples
+    --------
+    >>> thickness_kind(None), thickness_kind(0.2), thickness_kind("layers")
+    (None, 'constant', 'layers')
+    """
+    if thickness is None:
+        return None
+    return "layers" if isinstance(thickness, str) and thickness == "layers" else "constant"
 
 
 def _parameters(function) -> frozenset | None:
@@ -136,12 +161,19 @@ class Method:
     needs_scene : bool
         The function also takes ``scene=`` (an object-space model that reads the scene's
         description, e.g. a tree's canopy shell), which the experiments pass.
+    thickness_kinds : tuple of str, optional
+        The kinds of ``thickness`` (:data:`THICKNESS_KINDS`) the function takes: it is passed
+        a ``thickness`` option only of these kinds (and None), else it runs as without it.
+        Default: ``("constant",)`` when the function takes a ``thickness`` keyword (or any
+        keyword), else ``()``.
 
     Examples
     --------
     >>> line = get("line")
-    >>> line.taps(9), line.texels(9), line.fetch
-    (9, 9, 'nearest')
+    >>> line.taps(9), line.texels(9), line.fetch, line.thickness_kinds
+    (9, 9, 'nearest', ('constant', 'layers'))
+    >>> get("gtao").thickness_kinds, get("area").thickness_kinds, get("sao").thickness_kinds
+    (('layers',), ('constant',), ())
     """
 
     name: str
@@ -155,6 +187,7 @@ class Method:
     summary: str = ""
     reference_only: bool = False
     needs_scene: bool = False
+    thickness_kinds: tuple | None = None
     _parameters: frozenset | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -165,7 +198,36 @@ class Method:
         if self.fetch not in TEXELS_PER_TAP:
             raise ValueError(f"Method {self.name!r}: fetch must be one of {', '.join(TEXELS_PER_TAP)}, "
                              f"got {self.fetch!r}")
-        object.__setattr__(self, "_parameters", _parameters(self.function))
+        params = _parameters(self.function)
+        object.__setattr__(self, "_parameters", params)
+        takes = params is None or "thickness" in params
+        kinds = self.thickness_kinds
+        if kinds is None:
+            kinds = ("constant",) if takes else ()
+        kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
+        bad = [k for k in kinds if k not in THICKNESS_KINDS]
+        if bad:
+            raise ValueError(f"Method {self.name!r}: thickness_kinds must be some of {', '.join(THICKNESS_KINDS)}, "
+                             f"got {', '.join(map(repr, bad))}")
+        if kinds and not takes:
+            raise ValueError(f"Method {self.name!r}: thickness_kinds {kinds} needs a function that takes the "
+                             f"keyword thickness")
+        object.__setattr__(self, "thickness_kinds", tuple(k for k in THICKNESS_KINDS if k in kinds))
+
+    def takes_thickness(self, thickness) -> bool:
+        """Whether :meth:`run` passes the function ``thickness=thickness``: None when the
+        function takes the keyword, a number with ``"constant"`` and ``"layers"`` with
+        ``"layers"`` among :attr:`thickness_kinds`.
+
+        Examples
+        --------
+        >>> get("gtao").takes_thickness(0.2), get("gtao").takes_thickness("layers")
+        (False, True)
+        """
+        kind = thickness_kind(thickness)
+        if kind is None:
+            return self._parameters is None or "thickness" in self._parameters
+        return kind in self.thickness_kinds
 
     def texels(self, n: int, fetch: str | None = None) -> int:
         """Depth texels read per pixel with ``n`` samples: ``taps(n)`` x texels per tap of
@@ -187,6 +249,8 @@ class Method:
             raise ValueError(f"no registered method takes the option(s) {', '.join(map(repr, unknown))}; "
                              f"method {self.name!r} takes {', '.join(sorted(self._parameters or ()))}")
         kwargs = _taken(self._parameters, options)
+        if "thickness" in kwargs and not self.takes_thickness(kwargs["thickness"]):
+            del kwargs["thickness"]    # a kind of thickness the method does not take: run as without it
         if self.samples is not None:
             kwargs[self.samples] = self.default_samples if samples is None else samples
         if fetch is not None:
@@ -202,8 +266,9 @@ class Method:
 
         The experiments pass every method the same options (``radius``, ``normal_clamp``,
         ``thickness``, ``falloff``, ``seed``, ``scene``); each gets the ones its function
-        takes (:func:`filter_options`). An option that no registered method takes is an
-        error. A method whose function returns an :class:`~vobscure.Estimate` gives its
+        takes (:func:`filter_options`), ``thickness`` only of a kind it takes
+        (:attr:`thickness_kinds`, :meth:`takes_thickness`). An option that no registered
+        method takes is an error. A method whose function returns an :class:`~vobscure.Estimate` gives its
         value here and the whole estimate from :meth:`estimate`.
 
         Examples
@@ -390,14 +455,15 @@ def parse(spec) -> tuple[Config, ...]:
 
 
 # --------------------------------------------------------------------------- the registry
+# the VO estimators read the layers at the pixel a sample falls in (docs/screenspace.md, "Thickness from layers")
 register(Method("point", vo_point, default_samples=12, fetch="bilinear", taps=point_taps,
-                summary="point sampling of the ball (Loos & Sloan 2010, Sec. 4)"))
-register(Method("line", vo_line, default_samples=9, fetch="nearest",
+                thickness_kinds=("constant", "layers"), summary="point sampling of the ball (Loos & Sloan 2010, Sec. 4)"))
+register(Method("line", vo_line, default_samples=9, fetch="nearest", thickness_kinds=("constant", "layers"),
                 summary="line sampling: exact chords through the ball (Sec. 4.1)"))
-register(Method("area", vo_area, default_samples=1, fetch="bspline",
+register(Method("area", vo_area, default_samples=1, fetch="bspline", thickness_kinds=("constant",),
                 summary="area sampling with mip-mapped depth moments (Sec. 4.2)"))
 register(Method("reference", vo_reference, default_samples=4096, fetch="bilinear", taps=_reference_taps,
-                summary="the converged screen-space VO (dense stratified points)", reference_only=True))
+                thickness_kinds=("constant",), summary="the converged screen-space VO (dense stratified points)", reference_only=True))
 
 
 # --------------------------------------------------------------------------- the engines' baselines
@@ -440,25 +506,22 @@ GTAO_STEPS = 3
 VBAO_STEPS = GTAO_STEPS
 HBAO_STEPS = 4
 
-#: GTAO as the registry runs it, XeGTAO's "high" steps. Its ``thickness`` takes only the
-#: layers (``"layers"``), not the VO thickness model the experiments pass every method, so the
-#: registry does not see it (the signature without it): GTAO runs as without that option.
-_gtao = partial(gtao, steps=GTAO_STEPS)
-_gtao.__signature__ = inspect.signature(_gtao).replace(
-    parameters=[p for p in inspect.signature(_gtao).parameters.values() if p.name != "thickness"])
-
-register(Method("gtao", _gtao, default_samples=3, fetch="bilinear", samples="slices",
-                taps=_gtao_taps, quantity=_cosine_ao,
+# GTAO as the registry runs it, XeGTAO's "high" steps. Its ``thickness`` takes only the layers
+# (a constant thickness is the VO model; GTAO's heuristic for thin occluders is thin_occluder):
+# a number passed to every method does not reach it
+register(Method("gtao", partial(gtao, steps=GTAO_STEPS), default_samples=3, fetch="bilinear", samples="slices",
+                taps=_gtao_taps, quantity=_cosine_ao, thickness_kinds=("layers",),
                 summary="GTAO (Jimenez et al. 2016): horizons per slice, cosine AO; SAMPLES = slices of 3 steps "
                         "a side"))
 # Therrien et al. 2023 on GTAO's slices and taps: the cosine weighting scored against cosine AO,
 # the uniform one (the solid angle of each sector) against uniform AO
 register(Method("vbao", partial(vbao, steps=VBAO_STEPS), default_samples=3, fetch="bilinear", samples="slices",
-                taps=_vbao_taps, quantity=_cosine_ao,
+                taps=_vbao_taps, quantity=_cosine_ao, thickness_kinds=("constant", "layers"),
                 summary="VBAO (Therrien et al. 2023): a bitmask of occluded sectors per slice, thickness 0.5 R by "
                         "default, cosine AO; SAMPLES = slices of 3 steps a side"))
 register(Method("vbao_uniform", partial(vbao, steps=VBAO_STEPS, weighting="uniform"), default_samples=3,
                 fetch="bilinear", samples="slices", taps=_vbao_taps, quantity=_uniform_ao,
+                thickness_kinds=("constant", "layers"),
                 summary="VBAO with each sector weighed by its solid angle: uniform AO; SAMPLES = slices of 3 steps "
                         "a side"))
 register(Method("hbao", partial(hbao, steps=HBAO_STEPS), default_samples=8, fetch="nearest", fetch_parameter=None,

@@ -19,7 +19,10 @@ Pareto front in time and in taps, the cheapest configuration that meets a target
 best that fits a time budget, which error term dominates and what measurably reduces it (for
 the screen-space term, the thickness model is tried at a few thicknesses), and the error in the
 thin-feature band (:func:`vobscure.metrics.thin_feature_mask`: just behind silhouettes, where
-halos live) beside the whole frame's.
+halos live) beside the whole frame's (the verdict's text is :mod:`vobscure.experiments.verdict`).
+With ``thickness="layers"`` the G-buffer is depth-peeled to ``layers`` surfaces a pixel and
+the methods whose registry entry reads layers (:attr:`vobscure.methods.Method.thickness_kinds`)
+take their thickness from its solid intervals; the verdict says which did.
 
 Outputs (all written atomically into ``out``): ``results.csv``, ``results.md`` (verdict, then
 the table), ``summary.json`` (the verdict as data), ``tradeoff.png`` (error against time, taps
@@ -43,11 +46,13 @@ from .. import references as _references
 from .._validate import check_choice, check_int, check_positive
 from .common import (choose_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
                      write_text)
-from .sweeps import REFERENCES, InlineExecutor, SweepConfig, sweep
+from .sweeps import DEFAULT_LAYERS, REFERENCES, InlineExecutor, SweepConfig, check_thickness, sweep
+from .verdict import POOR_RMSE, SUGGEST_MIN_GAIN, TARGET_FACTOR, layers_sentence, pareto_front, thin_sentence, verdict
 
 __all__ = ["compare", "CompareResult", "verdict", "report_text", "pareto_front", "orbit_cameras", "parse_methods",
            "missing_note", "panel_reference",
-           "DEFAULT_METHODS", "DEFAULT_REFERENCES", "REFERENCES", "TARGET_FACTOR", "SUGGEST_THICKNESS"]
+           "DEFAULT_METHODS", "DEFAULT_REFERENCES", "DEFAULT_LAYERS", "REFERENCES", "TARGET_FACTOR", "POOR_RMSE",
+           "SUGGEST_THICKNESS", "SUGGEST_MIN_GAIN"]
 
 #: The paper's Table 1 configurations (Loos & Sloan 2010): points 12 and 33, lines 5 and 9, area 1.
 DEFAULT_METHODS = "point:12,point:33,line:5,line:9,area:1"
@@ -59,43 +64,10 @@ DEFAULT_SIZE = (256, 256)
 QUICK_SIZE = (64, 64)
 #: Metrics kept per reference.
 METRICS = ("rmse", "mae", "bias", "ssim")
-#: Default target RMSE: the best configuration's error times this factor.
-TARGET_FACTOR = 1.5
-#: A best RMSE above this (a fifth of the visibility range) is called out in the verdict as a
-#: poor fit rather than reported as if it were a good choice.
-POOR_RMSE = 0.2
 #: Thicknesses (fractions of the radius) tried when the screen-space error dominates.
 SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
-#: A thickness is recommended only when it lowers the RMSE by at least this fraction.
-SUGGEST_MIN_GAIN = 0.02
-_TERM_NAMES = {"sampling": "sampling", "screen": "screen-space model", "model": "VO-vs-AO model"}
-#: How the verdict names a reference a group of configurations is scored against.
-_REFERENCE_WORDS = {"screen": "the converged screen-space VO (the sampling error alone)",
-                    "volumetric": "the ray-cast world-space VO (the method's own quantity)",
-                    "shell": "the ray-cast shell VO (the world-space VO of surfaces of a stated thickness, "
-                             "standing in for the solid one on this open scene)"}
 
 parse_methods = _methods.parse
-
-
-def pareto_front(cost, error) -> np.ndarray:
-    """Indices of the configurations no other beats in both cost and error, by cost.
-
-    Examples
-    --------
-    >>> pareto_front([1, 2, 3, 4], [0.5, 0.6, 0.2, 0.1]).tolist()
-    [0, 2, 3]
-    """
-    cost = np.asarray(cost, dtype=float)
-    error = np.asarray(error, dtype=float)
-    ok = np.flatnonzero(np.isfinite(cost) & np.isfinite(error))
-    order = ok[np.lexsort((error[ok], cost[ok]))]
-    front, best = [], np.inf
-    for i in order:
-        if error[i] < best:
-            front.append(int(i))
-            best = error[i]
-    return np.array(front, dtype=np.intp)
 
 
 def orbit_cameras(camera, frames: int, *, degrees: float = 10.0):
@@ -117,7 +89,8 @@ def orbit_cameras(camera, frames: int, *, degrees: float = 10.0):
 class Stages:
     """The seconds of each stage of a comparison, in the order they ran, for the printout and
     ``provenance.json``: the view, each reference per radius (computed, read from the cache or
-    reused), the methods' runs (warm-up and timed repeats), the orbit and the thickness trials."""
+    reused), the G-buffer's depth-peeled layers (with ``thickness="layers"``), the methods' runs
+    (warm-up and timed repeats), the orbit and the thickness trials."""
 
     def __init__(self):
         self._records: dict[str, dict] = {}
@@ -141,7 +114,10 @@ class Stages:
                 elif key.startswith("reference:"):
                     name = f"reference {key.split(':', 1)[1]}" + (f" (R = {res.radius:.4g})" if len(radii) > 1 else "")
                 elif key == "gbuffer":
-                    continue      # rendered with the view, before the sweep
+                    if res.config.layers is None:
+                        continue      # rendered with the view, before the sweep
+                    name = f"G-buffer with {res.config.layers} layers"     # depth peeling for thickness='layers'
+
                 else:
                     name = key
                 self.add(name, seconds, status)
@@ -210,7 +186,7 @@ def _names(items, limit: int = 6) -> str:
 def missing_note(missing: dict, scene, thickness=None) -> str:
     """The verdict's sentences on the references that could not be computed on the scene and
     what scores their quantity instead (``missing``: name -> stand-in or None; ``thickness``:
-    the comparison's, None when it has none).
+    the comparison's, None when it has none; with ``"layers"`` the shell has its default thickness).
 
     Examples
     --------
@@ -225,8 +201,8 @@ def missing_note(missing: dict, scene, thickness=None) -> str:
                f"meshes, and {len(bad)} of {len(scene.meshes)} mesh(es) are open or alpha-tested with holes "
                f"({_names(bad)}).")
         if stand == "shell":
-            t = (f"{_references.SHELL_THICKNESS:g} x the radius thick behind them (--thickness sets it)"
-                 if thickness is None else f"{thickness:.4g} thick behind them (--thickness)")
+            t = (f"{_references.SHELL_THICKNESS:g} x the radius thick behind them (a numeric --thickness sets it)"
+                 if thickness is None or thickness == "layers" else f"{thickness:.4g} thick behind them (--thickness)")
             why += (f" The VO estimators are scored against 'shell' instead: the ray-cast VO of surfaces {t}, "
                     f"the thickness model applied across every surface, hidden and off-screen ones included "
                     f"(docs/groundtruth.md); no thickness trials are run against it, since its thickness is "
@@ -242,8 +218,10 @@ def _row(result, metrics=METRICS) -> dict:
     """A compare row from a sweep result: configuration, cost, error against every reference,
     the method's own reference, and the decomposition."""
     c = result.config
+    layered = c.method_thickness == "layers"
     row = dict(method=c.method, samples=c.samples, label=c.label, radius=result.radius,
-               normal_clamp=c.normal_clamp, thickness=c.thickness, seconds=result.seconds,
+               normal_clamp=c.normal_clamp, thickness=c.method_thickness, layers=c.layers if layered else 0,
+               seconds=result.seconds,
                taps_per_pixel=result.taps_per_pixel, texels_per_pixel=result.texels_per_pixel,
                quantity=c.quantity, reference_only=_methods.get(c.method).reference_only)
     for name, rep in result.errors.items():
@@ -256,7 +234,8 @@ def _row(result, metrics=METRICS) -> dict:
     row["own_reference"] = own
     row["own_rmse"] = row[f"{own}_rmse"] if own else float("nan")
     row["own_bias"] = row[f"{own}_bias"] if own else float("nan")
-    if result.decomposition is not None:
+    # with layers the estimate's limit is not the single-depth screen-space VO: no split by cause
+    if result.decomposition is not None and not layered:
         for term in ("sampling", "screen", "model", "total"):
             if f"{term}_rmse" in result.decomposition:
                 row[f"{term}_error_rmse"] = result.decomposition[f"{term}_rmse"]
@@ -265,7 +244,7 @@ def _row(result, metrics=METRICS) -> dict:
 
 
 def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=None, methods=None,
-            normal_clamp: bool = False, thickness=None, references=None, repeats: int = 3,
+            normal_clamp: bool = False, thickness=None, layers=None, references=None, repeats: int = 3,
             rays: int = 256, volume_samples: int = 1024,
             screen_samples: int = _references.SCREEN_SAMPLES, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
@@ -296,8 +275,18 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         vegetation scene (one whose ``metadata`` holds a canopy) also :data:`VEGETATION_METHODS`.
     normal_clamp : bool
         Half-ball VO (Loos & Sloan 2010, Sec. 4.4) for every estimator and VO reference.
-    thickness : float, optional
-        The thickness model (Sec. 4.3) of every estimator and of the screen-space reference.
+    thickness : float or "layers", optional
+        A number: the thickness model (Sec. 4.3) of every estimator that takes one and of the
+        screen-space reference. ``"layers"``: the G-buffer is rendered with ``layers``
+        depth-peeled layers (``render_gbuffer(..., layers=K)``, ``docs/layers.md``) and every
+        method that takes ``thickness="layers"`` (:attr:`vobscure.methods.Method.thickness_kinds`:
+        point, line, gtao, vbao) reads its solid intervals; the others run as without a
+        thickness, the references too (``"screen"`` stays the single-depth converged VO), and
+        the verdict says which ran with layers. A user's G-buffer reads its own
+        ``gbuffer.intervals``.
+    layers : int, optional
+        The layers K >= 2 with ``thickness="layers"``; default
+        :data:`~vobscure.experiments.sweeps.DEFAULT_LAYERS` (4). Only with ``"layers"``.
     references : sequence of str, optional
         Some of the registry :data:`vobscure.references.REFERENCES`; only these are computed.
         Default ``("screen", "volumetric", "ao")`` and the reference of every method's own
@@ -352,10 +341,13 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         thickness, seconds, taps_per_pixel, texels_per_pixel, quantity``,
         ``<reference>_<metric>`` for every reference and metric of :data:`METRICS`,
         ``own_reference, own_rmse, own_bias`` (the reference of the method's own quantity),
+        ``thickness`` (the one the method ran with: None when it does not take the kind given)
+        and ``layers`` (K when it read the layers, 0 when not),
         ``own_thin_rmse, own_thin_bias, thin_pixels`` (the same in the thin-feature band,
         :func:`vobscure.metrics.thin_feature_mask` at the row's radius)
         and, with the screen and volumetric references, the decomposition
-        ``<term>_error_rmse`` / ``_bias``.
+        ``<term>_error_rmse`` / ``_bias`` (not for a row with layers, whose limit is not the
+        single-depth screen-space VO).
 
     Examples
     --------
@@ -411,8 +403,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                                "near the holes")
     repeats = check_int(repeats, "repeats")
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
-    if thickness is not None:
-        thickness = check_positive(thickness, "thickness")
+    thickness, layers = check_thickness(thickness, layers, frame=sc if frame else None)
     if target_rmse is not None:
         target_rmse = check_positive(target_rmse, "target_rmse")
     if budget_ms is not None:
@@ -451,7 +442,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     t_start = time.perf_counter()
     stages = Stages()
     stages.add("view (G-buffer, radius)", t_start - t_view, "computed")
-    common = dict(scene=sc, camera=camera, normal_clamp=normal_clamp, thickness=thickness, seed=seed,
+    common = dict(scene=sc, camera=camera, normal_clamp=normal_clamp, thickness=thickness, layers=layers, seed=seed,
                   references=references, rays=rays, volume_samples=volume_samples,
                   screen_samples=screen_samples, reference_seed=seed, allow_open=allow_open)
     sweep_configs = [SweepConfig(method=c.method, samples=c.samples, fetch=c.fetch, radius=radius,
@@ -469,7 +460,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     stages.add_sweep(results)
     if orbit > 1:
         t0 = time.perf_counter()
-        _orbit(sc, camera, rows, configs, radii, orbit, normal_clamp=normal_clamp, thickness=thickness,
+        _orbit(sc, camera, rows, configs, radii, orbit, normal_clamp=normal_clamp, thickness=thickness, layers=layers,
                screen_samples=screen_samples, seed=seed, cache=store, progress=progress)
         stages.add(f"orbit ({orbit} frames)", time.perf_counter() - t0, "computed")
     thickness_trials = []
@@ -481,7 +472,13 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         stages.add("thickness trials", time.perf_counter() - t0, "computed")
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
     summary["thin_band"] = thin_band
-    summary["text"] += [_thin_sentence(band, rows) for band in thin_band if band["pixels"]]
+    summary["text"] += [thin_sentence(band, rows) for band in thin_band if band["pixels"]]
+    if thickness == "layers":
+        summary["text"].append(layers_sentence(rows, layers))
+    summary["layers"] = None if thickness != "layers" else dict(
+        layers=layers, slots=int(gb.intervals.count),
+        with_layers=list(dict.fromkeys(r["label"] for r in rows if r["thickness"] == "layers")),
+        without_layers=list(dict.fromkeys(r["label"] for r in rows if r["thickness"] != "layers")))
     if missing:
         summary["text"].insert(0, missing_note(missing, sc, thickness))
     summary["missing_references"] = {k: dict(stand_in=v, open_meshes=list(sc.open_meshes)) for k, v in missing.items()}
@@ -498,9 +495,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         command="vobscure compare", scene=scene_name, camera=camera.to_dict(), radii=list(radii),
         radius_rule=radius_choice.to_dict() if radius_choice is not None else None,
         view={k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in view_facts.items()},
-        methods=[c.label for c in configs], normal_clamp=bool(normal_clamp), thickness=thickness,
+        methods=[c.label for c in configs], normal_clamp=bool(normal_clamp), thickness=thickness, layers=layers,
         references=list(references), missing_references=dict(missing), allow_open=allow_open,
-        shell_thickness=({f"{r:g}": (thickness if thickness is not None else _references.SHELL_THICKNESS * r)
+        shell_thickness=({f"{r:g}": (_references.SHELL_THICKNESS * r if thickness in (None, "layers") else thickness)
                           for r in radii} if "shell" in references else None),
         repeats=repeats, rays=rays, volume_samples=volume_samples,
         screen_samples=screen_samples, seed=seed, orbit=orbit, quick=bool(quick),
@@ -514,7 +511,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                          references=all_refs, images=images)
 
 
-def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness, screen_samples, seed,
+def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness, layers, screen_samples, seed,
            cache, progress):
     """Add ``flicker`` (estimate minus reference) and ``flicker_raw`` to every row: the same
     configurations over an orbit of cameras, measured (not timed) by the sweep."""
@@ -522,7 +519,7 @@ def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness,
 
     cams = orbit_cameras(camera, frames)
     sweep_configs = [SweepConfig(scene=sc, camera=cam, method=c.method, samples=c.samples, fetch=c.fetch,
-                                 radius=r, normal_clamp=normal_clamp, thickness=thickness, seed=seed,
+                                 radius=r, normal_clamp=normal_clamp, thickness=thickness, layers=layers, seed=seed,
                                  repeats=0, references=("screen",), screen_samples=screen_samples,
                                  reference_seed=seed)
                      for cam in cams for r in radii for c in configs]
@@ -586,163 +583,6 @@ def _thin_band(rows, images, all_refs, gb) -> list:
     return bands
 
 
-def _thin_sentence(band, rows) -> str:
-    """The verdict's sentence on the thin-feature band at one radius: per reference, the most
-    accurate configuration there against the whole frame's error."""
-    sel = [r for r in rows if r["radius"] == band["radius"] and np.isfinite(r.get("own_thin_rmse", np.nan))
-           and not r.get("reference_only", False)]
-    parts = [f"against {ref!r} {b['label']}, RMSE {b['own_thin_rmse']:.4f} (bias {b['own_thin_bias']:+.4f}) "
-             f"against {b['own_rmse']:.4f} over the whole frame"
-             for ref in dict.fromkeys(r["own_reference"] for r in sel)
-             for b in [min((r for r in sel if r["own_reference"] == ref), key=lambda r: r["own_thin_rmse"])]]
-    return (f"Thin-feature band at R = {band['radius']:.4g} (the far side of depth edges, where halos live: "
-            f"{band['pixels']} pixels, {band['fraction']:.1%} of the covered ones): "
-            + ("; ".join(parts) + "." if parts else "no configuration is scored there."))
-
-
-# --------------------------------------------------------------------------- the verdict
-def _ms(seconds) -> str:
-    return f"{1e3 * seconds:.1f} ms"
-
-
-def verdict(rows, *, target_rmse=None, budget_ms=None, thickness_trials=()) -> dict:
-    """The answer to "which estimator, with how many samples, at what cost?" from compare rows.
-
-    Each configuration is judged against its own reference (``own_reference``: the reference
-    of the quantity it estimates), and, where the converged screen-space VO is its limit,
-    against that too (``screen_rmse``: the sampling error alone, which is what the choice of
-    estimator and sample count controls). Per reference (and radius): the Pareto front in time
-    and in taps, the cheapest configuration meeting the target RMSE (default
-    :data:`TARGET_FACTOR` x the best error) in time and in taps, the most accurate one
-    within ``budget_ms``; then which term of the decomposition dominates the best
-    configuration's error and what reduces it, with the measured thickness trials when given.
-
-    Returns
-    -------
-    dict
-        ``text`` (list of sentences), ``groups`` (per reference, radius and error column:
-        ``error``, ``front_time``,
-        ``front_taps``, ``target_rmse``, ``cheapest_time``, ``cheapest_taps``,
-        ``best_in_budget``, ``best``), ``dominant`` (per radius: the terms' RMSE and the
-        dominant one), ``thickness`` (the trials and the best of them).
-
-    Examples
-    --------
-    >>> rows = [dict(label="line:5", method="line", radius=1.0, seconds=0.004, taps_per_pixel=5,
-    ...              own_reference="screen", own_rmse=0.05),
-    ...         dict(label="point:33", method="point", radius=1.0, seconds=0.07, taps_per_pixel=32,
-    ...              own_reference="screen", own_rmse=0.02)]
-    >>> v = verdict(rows, target_rmse=0.03)
-    >>> v["groups"][0]["cheapest_time"], [r for r in v["groups"][0]["front_time"]]
-    ('point:33', ['line:5', 'point:33'])
-    """
-    text, groups, dominant = [], [], []
-    shippable = [r for r in rows if not r.get("reference_only", False)]
-    # (reference, radius, error column): each configuration against its own quantity's
-    # reference, and -- for estimators whose limit is the converged screen-space VO -- against
-    # that as well, which isolates the sampling error the choice of estimator controls
-    keys = {(r["own_reference"], r["radius"], "own_rmse") for r in shippable if r.get("own_reference")}
-    def screen_limited(r):
-        q = r.get("quantity")
-        return r.get("own_reference") not in (None, "screen") and np.isfinite(r.get("screen_rmse", np.nan)) \
-            and (q is None or _methods.QUANTITIES[q].screen_limit)
-
-    keys |= {("screen", r["radius"], "screen_rmse") for r in shippable if screen_limited(r)}
-    order = _references.names()
-    for ref, radius, col in sorted(keys, key=lambda k: (k[1], k[2] != "own_rmse", order.index(k[0]))):
-        sel = [r for r in shippable if r["radius"] == radius and np.isfinite(r.get(col, np.nan))
-               and (r.get("own_reference") == ref if col == "own_rmse" else screen_limited(r))]
-        if not sel:
-            continue
-        err = np.array([r[col] for r in sel])
-        best = sel[int(np.argmin(err))]
-        target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best[col]
-        g = dict(reference=ref, radius=radius, error=col, target_rmse=target, best=best["label"],
-                 best_rmse=best[col])
-        for cost, name in (("seconds", "time"), ("taps_per_pixel", "taps")):
-            x = np.array([r[cost] for r in sel], float)
-            g[f"front_{name}"] = [sel[i]["label"] for i in pareto_front(x, err)]
-            ok = [r for r in sel if r[col] <= target and np.isfinite(r[cost])]
-            g[f"cheapest_{name}"] = min(ok, key=lambda r: (r[cost], r[col]))["label"] if ok else None
-        if budget_ms is not None:
-            within = [r for r in sel if np.isfinite(r["seconds"]) and 1e3 * r["seconds"] <= budget_ms]
-            g["best_in_budget"] = min(within, key=lambda r: r[col])["label"] if within else None
-        groups.append(g)
-        what = _REFERENCE_WORDS.get(ref, f"the ray-cast {_references.get(ref).measures} ({ref!r}, the method's "
-                                         f"own quantity)")
-        by_label = {r["label"]: r for r in sel}
-        lines = [f"Against {what} at R = {radius:.4g}: the most accurate is {best['label']} "
-                 f"(RMSE {best[col]:.4f}, {_ms(best['seconds'])}, {best['taps_per_pixel']} taps/px)."]
-        if best[col] > POOR_RMSE:
-            lines.append(f"That is a poor fit: even the best is off by {best[col]:.2f} on a visibility range of 1, "
-                         f"so no configuration here estimates this reference well on this scene"
-                         + (" (an object-space model whose proxy does not fit the geometry: see its page in the "
-                            "docs)." if best["taps_per_pixel"] == 0 else "; the error split below says why."
-                            if ref == "volumetric" else "."))
-        for name, unit in (("time", "time"), ("taps", "taps per pixel")):
-            cheap = g[f"cheapest_{name}"]
-            if cheap is None:
-                lines.append(f"No configuration reaches RMSE {target:.4f}.")
-                break
-            c = by_label[cheap]
-            lines.append(f"Cheapest in {unit} with RMSE <= {target:.4f}"
-                         f"{'' if target_rmse is not None else f' ({TARGET_FACTOR:g} x the best)'}: "
-                         f"{cheap} (RMSE {c[col]:.4f}, {_ms(c['seconds'])}, {c['taps_per_pixel']} taps/px).")
-        lines.append(f"Pareto front in time: {', '.join(g['front_time'])}; in taps: {', '.join(g['front_taps'])}.")
-        if budget_ms is not None:
-            b = g["best_in_budget"]
-            lines.append(f"Within {budget_ms:g} ms: " + (f"{b} (RMSE {by_label[b][col]:.4f})." if b
-                                                         else "no configuration fits."))
-        text.append(" ".join(lines))
-    # which error term dominates, for the most accurate configuration against the world-space VO
-    def vo_estimator(r):
-        # the decomposition (estimate - screen VO - world VO - AO) describes VO estimators only
-        q = r.get("quantity")
-        return q is None or _methods.QUANTITIES[q].screen_limit
-
-    for radius in sorted({r["radius"] for r in shippable}):
-        sel = [r for r in shippable if r["radius"] == radius and "screen_error_rmse" in r and vo_estimator(r)]
-        if not sel:
-            continue
-        world = next((w for w in _references.WORLD_VO if any(f"{w}_rmse" in r for r in sel)), "volumetric")
-        best = min(sel, key=lambda r: r.get(f"{world}_rmse", np.inf))
-        terms = {t: best[f"{t}_error_rmse"] for t in ("sampling", "screen", "model") if f"{t}_error_rmse" in best}
-        top = max(terms, key=terms.get)
-        dominant.append(dict(radius=radius, label=best["label"], dominant=top, **{f"{t}_rmse": v for t, v in terms.items()}))
-        parts = ", ".join(f"{_TERM_NAMES[t]} {v:.4f}" for t, v in terms.items())
-        sentence = (f"Error of {best['label']} at R = {radius:.4g}, split by cause (RMSE): {parts}; "
-                    f"the {_TERM_NAMES[top]} error dominates. ")
-        if top == "sampling":
-            sentence += ("More samples or a method further along the front reduce it; "
-                         "the bilateral blur (vobscure.bilateral_blur) trades it for bias.")
-        elif top == "screen":
-            sentence += ("The depth buffer treats every surface as infinitely thick and knows nothing "
-                         "behind it or outside the image; more samples cannot fix that.")
-        else:
-            sentence += ("Even the exact world-space VO differs this much from ray-cast AO: VO is not AO. "
-                         "The normal clamp (--normals, the half-ball) or an AO estimator targets AO more closely.")
-        if "model" in terms and top != "model":
-            sentence += (f" Against ray-cast AO, a different quantity, it is further off by the model "
-                         f"error ({terms['model']:.4f}); that is not the estimator's sampling accuracy.")
-        text.append(sentence)
-    thick = None
-    if thickness_trials:
-        best_t = min(thickness_trials, key=lambda t: t["volumetric_rmse"])
-        thick = dict(trials=list(thickness_trials), best=best_t)
-        tried = ", ".join(f"{t['thickness']:.3g} ({t['factor']:g} R): {t['volumetric_rmse']:.4f}"
-                          for t in thickness_trials)
-        gain = best_t["baseline_rmse"] - best_t["volumetric_rmse"]
-        if gain > SUGGEST_MIN_GAIN * best_t["baseline_rmse"]:
-            text.append(f"Thickness model (Loos & Sloan 2010, Sec. 4.3), measured on {best_t['label']}: "
-                        f"RMSE against the world-space VO {best_t['baseline_rmse']:.4f} without it; {tried}. "
-                        f"Use --thickness {best_t['thickness']:.3g}: RMSE {best_t['volumetric_rmse']:.4f} "
-                        f"({gain / best_t['baseline_rmse']:.0%} lower) in {_ms(best_t['seconds'])}.")
-        else:
-            text.append(f"Thickness model measured on {best_t['label']} ({tried}): no thickness beats "
-                        f"none (RMSE {best_t['baseline_rmse']:.4f}).")
-    return dict(text=text, groups=groups, dominant=dominant, thickness=thick)
-
-
 # --------------------------------------------------------------------------- writing
 def _markdown(rows, summary, provenance) -> str:
     w, h = provenance["camera"]["size"]
@@ -758,7 +598,13 @@ def _markdown(rows, summary, provenance) -> str:
         if ref not in own and ref != "screen":
             for m in METRICS:
                 headers[f"{ref}_{m}"] = f"{ref}_{m} (model error)"
-    thick = "none" if provenance["thickness"] is None else f"{provenance['thickness']:.4g}"
+    thick = provenance["thickness"]
+    if thick == "layers":
+        cols[1:1] = ["thickness", "layers"]
+        thick = (f"layers (K = {provenance['layers']}; `layers` 0: the method takes none and ran without)"
+                 if provenance["layers"] is not None else "layers (the G-buffer's own intervals)")
+    else:
+        thick = "none" if thick is None else f"{thick:.4g}"
     lines = [f"# vobscure compare: {provenance['scene']}", "", "## Verdict", ""]
     lines += [f"- {s}" for s in summary["text"]] or ["- (no configuration could be scored)"]
     lines += ["", "## Measurements", "",

@@ -52,7 +52,8 @@ from ..metrics import DECOMPOSITION_TERMS
 from .common import default_radius, progress_bar, write_text
 
 __all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "results_to_csv",
-           "results_to_markdown", "REFERENCES", "TIMING_FIELDS", "DEFAULT_SIZE", "DEFAULT_WORKERS"]
+           "results_to_markdown", "check_thickness", "REFERENCES", "TIMING_FIELDS", "DEFAULT_SIZE",
+           "DEFAULT_WORKERS", "DEFAULT_LAYERS"]
 
 #: The names of the references an estimate can be compared with, in the order of the result
 #: columns: those of the registry :data:`vobscure.references.REFERENCES`, which says what each
@@ -64,11 +65,53 @@ TIMING_FIELDS = ("seconds", "seconds_runs", "cpu_seconds")
 DEFAULT_SIZE = (64, 64)
 #: Processes of the default local executor.
 DEFAULT_WORKERS = 2
+#: Depth-peeled layers of the G-buffer when ``thickness="layers"`` gives no count.
+DEFAULT_LAYERS = 4
 #: Scenes, G-buffers and references a worker process keeps in memory (least recently used
 #: first out; a view with its scene and four references takes six).
 MEMO_ENTRIES = 12
 #: Statistics of :class:`~vobscure.metrics.ErrorReport` written per reference by :meth:`SweepResult.as_row`.
 ERROR_STATS = ("rmse", "mae", "bias", "max_abs", "psnr", "ssim", "pixels")
+
+
+def check_thickness(thickness, layers, *, frame=None) -> tuple:
+    """``(thickness, layers)`` checked: ``thickness`` None, a positive number (the thickness
+    model, Loos & Sloan 2010, Sec. 4.3) or ``"layers"`` (the solid intervals of a layered
+    G-buffer); ``layers`` the depth-peeled layers K >= 2 to render, only with ``"layers"``
+    (default :data:`DEFAULT_LAYERS`), None otherwise. ``frame``: a user's G-buffer, which
+    brings its own intervals (``gbuffer.intervals``) and has no scene to render layers from.
+
+    Examples
+    --------
+    >>> check_thickness("layers", None), check_thickness(0.2, None), check_thickness(None, None)
+    (('layers', 4), (0.2, None), (None, None))
+    >>> check_thickness("fat", None)
+    Traceback (most recent call last):
+    ...
+    ValueError: thickness must be a positive number (the thickness model, world units) or 'layers' (the solid intervals of a depth-peeled G-buffer), got 'fat'
+    """
+    if isinstance(thickness, str):
+        if thickness != "layers":
+            raise ValueError(f"thickness must be a positive number (the thickness model, world units) or 'layers' "
+                             f"(the solid intervals of a depth-peeled G-buffer), got {thickness!r}")
+    elif thickness is not None:
+        thickness = check_positive(thickness, "thickness")
+    if layers is not None:
+        layers = check_int(layers, "layers", minimum=2)
+        if thickness != "layers":
+            raise ValueError(f"layers={layers} renders depth-peeled layers that only thickness='layers' reads; "
+                             f"give thickness='layers' (--thickness layers) or no layers")
+    if thickness == "layers" and frame is not None:
+        if layers is not None:
+            raise ValueError("layers renders a scene's layers; a G-buffer brings its own (gbuffer.intervals), "
+                             "so give no layers with it")
+        if frame.intervals is None:
+            raise ValueError("thickness='layers' reads the G-buffer's solid intervals, but gbuffer.intervals is "
+                             "None: attach them (GBuffer.from_arrays(..., back_depth=...) or "
+                             "gbuffer.with_intervals(...)) or give a numeric thickness")
+    elif thickness == "layers" and layers is None:
+        layers = DEFAULT_LAYERS
+    return thickness, layers
 
 
 def _scene_spec(scene):
@@ -111,8 +154,16 @@ class SweepConfig:
         when both are given. Default ``scene.camera(size)``, the scene's suggested view.
     normal_clamp : bool
         Half-ball VO (Loos & Sloan 2010, Sec. 4.4) for the estimate and the VO references.
-    thickness : float, optional
-        The thickness model (Sec. 4.3) of the estimate and of the screen-space reference.
+    thickness : float or "layers", optional
+        A number: the thickness model (Sec. 4.3) of the estimate and of the screen-space
+        reference. ``"layers"``: the G-buffer is rendered with ``layers`` depth-peeled layers
+        and a method that takes ``thickness="layers"``
+        (:meth:`vobscure.methods.Method.takes_thickness`) reads its solid intervals; the
+        references have no thickness then (the screen-space reference is the single-depth
+        model). A method that does not take the kind given runs as without it.
+    layers : int, optional
+        Layers K >= 2 of the G-buffer with ``thickness="layers"`` (default
+        :data:`DEFAULT_LAYERS`; a user's G-buffer brings its own intervals and takes none).
     falloff : {"constant", "quadratic"}
         As in the estimators; the screen-space and world-space VO references use the same.
     seed : int
@@ -153,7 +204,8 @@ class SweepConfig:
     size: tuple | None = None
     camera: object = None
     normal_clamp: bool = False
-    thickness: float | None = None
+    thickness: float | str | None = None
+    layers: int | None = None
     falloff: str = "constant"
     seed: int = 0
     repeats: int = 1
@@ -195,8 +247,10 @@ class SweepConfig:
         put(self, "camera", camera)
         put(self, "size", camera.size if camera is not None else (size or DEFAULT_SIZE))
         put(self, "normal_clamp", _check_bool(self.normal_clamp, "normal_clamp"))
-        if self.thickness is not None:
-            put(self, "thickness", check_positive(self.thickness, "thickness"))
+        thickness, layers = check_thickness(self.thickness, self.layers,
+                                            frame=self.scene if isinstance(self.scene, GBuffer) else None)
+        put(self, "thickness", thickness)
+        put(self, "layers", layers)
         check_choice(self.falloff, "falloff", VO_FALLOFFS)
         put(self, "seed", check_int(self.seed, "seed", minimum=0))
         put(self, "repeats", check_int(self.repeats, "repeats", minimum=0))
@@ -223,6 +277,18 @@ class SweepConfig:
         return self.method_config.label
 
     @property
+    def method_thickness(self):
+        """The thickness the method is given: :attr:`thickness` when it takes that kind
+        (:meth:`vobscure.methods.Method.takes_thickness`), else None (it runs as without)."""
+        return self.thickness if self.method_config.spec.takes_thickness(self.thickness) else None
+
+    @property
+    def reference_thickness(self) -> float | None:
+        """The thickness the references are computed with: a number, or None (with
+        ``"layers"``: no reference reads layers)."""
+        return None if self.thickness == "layers" else self.thickness
+
+    @property
     def quantity(self) -> str:
         """What the method estimates with this ``normal_clamp`` (:data:`vobscure.methods.QUANTITIES`)."""
         return self.method_config.quantity(self.normal_clamp)
@@ -241,8 +307,10 @@ class SweepConfig:
 
     @property
     def view_key(self) -> str:
-        """The scene and camera (or size) as one string: configurations that share it share a
-        G-buffer and references."""
+        """The scene and camera (or size) as one string: configurations that share it share
+        references, and a G-buffer when they also share :attr:`layers` (the first layer of a
+        layered G-buffer is the one-layer G-buffer, bit for bit, and no reference reads the
+        others)."""
         cam = self.camera.to_dict() if self.camera is not None else {"size": list(self.size)}
         scene = self.scene if isinstance(self.scene, str) else f"<{type(self.scene).__name__} at {id(self.scene):#x}>"
         return json.dumps([scene, cam], sort_keys=True)
@@ -328,14 +396,16 @@ class SweepResult:
         return {**self.__dict__, "gbuffer": None}
 
     def as_row(self) -> dict:
-        """A flat record for tables: the configuration, the costs, ``<stat>_<reference>`` for
-        every reference and statistic of :data:`ERROR_STATS`, and the decomposition's
+        """A flat record for tables: the configuration (``thickness`` the one the method ran
+        with, :attr:`SweepConfig.method_thickness`; ``layers`` K when it read them), the costs,
+        ``<stat>_<reference>`` for every reference and statistic of :data:`ERROR_STATS`, and the decomposition's
         ``<term>_<stat>`` columns (with ``decomposition_target``)."""
         c = self.config
         row = {
             "scene": c.scene_name, "width": c.size[0], "height": c.size[1], "method": c.method,
             "samples": c.samples, "fetch": c.method_config.fetch_used, "radius": self.radius,
-            "normal_clamp": c.normal_clamp, "thickness": c.thickness, "falloff": c.falloff, "seed": c.seed,
+            "normal_clamp": c.normal_clamp, "thickness": c.method_thickness,
+            "layers": c.layers if c.method_thickness == "layers" else None, "falloff": c.falloff, "seed": c.seed,
             "repeats": c.repeats, "seconds": self.seconds,
             "seconds_runs": " ".join(repr(s) for s in self.seconds_runs), "cpu_seconds": self.cpu_seconds,
             "taps_per_pixel": self.taps_per_pixel, "texels_per_pixel": self.texels_per_pixel,
@@ -430,7 +500,8 @@ class _Stages:
 
 def view(config: SweepConfig, stages: _Stages | None = None):
     """(scene, camera, G-buffer) of a configuration, made once per worker process and kept
-    while the sweep runs. ``stages``: records the ``"gbuffer"`` stage's seconds."""
+    while the sweep runs, with ``config.layers`` depth-peeled layers when it gives them (a
+    G-buffer per view and layer count). ``stages``: records the ``"gbuffer"`` stage's seconds."""
     from ..render import render_gbuffer
     from ..scenes import resolve
 
@@ -442,11 +513,12 @@ def view(config: SweepConfig, stages: _Stages | None = None):
         scene = _MEMO.get(("scene", config.view_key if not isinstance(config.scene, str) else config.scene, stamp),
                           lambda: resolve(config.scene)[0])
         camera = config.camera if config.camera is not None else scene.camera(config.size)
-        return scene, camera, render_gbuffer(scene, camera)
+        layered = {} if config.layers is None else {"layers": config.layers}
+        return scene, camera, render_gbuffer(scene, camera, **layered)
 
     if stages is not None:
         make_view = stages.timed("gbuffer", make_view)
-    result = _MEMO.get(("view", config.view_key, stamp), make_view)
+    result = _MEMO.get(("view", config.view_key, config.layers, stamp), make_view)
     if stages is not None:
         stages.reused("gbuffer")
     return result
@@ -462,7 +534,8 @@ def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache, 
     ref = _references.get(name)
     params = ref.arguments(radius=radius, seed=config.reference_seed, rays=config.rays,
                            volume_samples=config.volume_samples, screen_samples=config.screen_samples,
-                           normal_clamp=config.normal_clamp, thickness=config.thickness, falloff=config.falloff,
+                           normal_clamp=config.normal_clamp, thickness=config.reference_thickness,
+                           falloff=config.falloff,
                            allow_open=config.allow_open)
     compute = getattr(_cache, ref.cached_by)
 
@@ -637,7 +710,7 @@ def sweep(configs: Iterable[SweepConfig], *, executor: Executor | None = None, p
 
 # ----------------------------------------------------------------------------- writers
 _COLUMNS_HEAD = ("scene", "width", "height", "method", "samples", "fetch", "radius", "normal_clamp",
-                 "thickness", "falloff", "seed", "repeats", "seconds", "seconds_runs", "cpu_seconds",
+                 "thickness", "layers", "falloff", "seed", "repeats", "seconds", "seconds_runs", "cpu_seconds",
                  "taps_per_pixel", "texels_per_pixel", "pixels", "quantity", "own_reference")
 _COLUMNS_TAIL = ("references", "rays", "volume_samples", "screen_samples", "reference_seed", "camera")
 
