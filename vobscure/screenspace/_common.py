@@ -454,6 +454,13 @@ def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None,
                 yield index[c:c + chunk], texture[a, b]
 
 
+def _nearest_index(xs, ys, H: int, W: int) -> np.ndarray:
+    """Flat index of the pixel containing (xs, ys) (finite coordinates), clamped to the image."""
+    j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+    i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
+    return i * W + j
+
+
 def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str = "nearest",
                 offscreen: str = "clamp", reciprocal: bool = False, with_mask: bool = False):
     """Depth-buffer values at continuous pixel coordinates (x, y) (float64).
@@ -461,47 +468,68 @@ def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str =
     ``fetch="nearest"``: the pixel containing (x, y). ``"bilinear"``: interpolation between
     the four nearest pixel centres, of 1/z when ``reciprocal`` (perspective: exact on
     planes) and of z otherwise; where any of them is background the nearest value is used
-    (interpolating towards +inf would invent geometry); ``with_mask`` also returns where
-    the bilinear value was used.
+    (interpolating towards +inf would invent geometry; that pixel is one of the four, read
+    again only there); ``with_mask`` also returns where the bilinear value was used.
     ``offscreen="clamp"``: coordinates outside the image read the nearest border pixel;
     ``"open"``: they read background (+inf), i.e. empty space. Non-finite coordinates
     (a point behind a perspective camera) read background.
     """
     H, W = depth.shape
-    finite = np.isfinite(x) & np.isfinite(y)
-    xs = np.where(finite, x, 0.0)
-    ys = np.where(finite, y, 0.0)
-    outside = (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H) | ~finite
     flat = depth.reshape(-1)
-    j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
-    i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
-    d = flat[i * W + j].astype(np.float64, copy=False)
+    finite = np.isfinite(x)
+    finite &= np.isfinite(y)
+    all_finite = bool(finite.all())
+    if all_finite:
+        xs, ys = x, y
+    else:
+        xs = np.where(finite, x, 0.0)
+        ys = np.where(finite, y, 0.0)
     if fetch == "bilinear":
         fx = np.clip(xs - 0.5, 0, W - 1)
         fy = np.clip(ys - 0.5, 0, H - 1)
-        j0 = np.floor(fx).astype(np.intp)
-        i0 = np.floor(fy).astype(np.intp)
+        # the texel below and left of (x, y) and the weights of its neighbours
+        j0 = np.floor(fx)
+        i0 = np.floor(fy)
+        tx = np.subtract(fx, j0, out=fx)
+        ty = np.subtract(fy, i0, out=fy)
+        j0 = j0.astype(np.intp)
+        i0 = i0.astype(np.intp)
         j1 = np.minimum(j0 + 1, W - 1)
-        i1 = np.minimum(i0 + 1, H - 1)
-        tx, ty = fx - j0, fy - i0
-        d00, d01, d10, d11 = (flat[a * W + b].astype(np.float64, copy=False)
-                              for a, b in ((i0, j0), (i0, j1), (i1, j0), (i1, j1)))
-        ok = np.isfinite(d00) & np.isfinite(d01) & np.isfinite(d10) & np.isfinite(d11)
+        row0 = i0 * W
+        row1 = np.minimum(i0 + 1, H - 1)
+        row1 *= W
+        d00, d01, d10, d11 = (flat[a + b].astype(np.float64, copy=False)
+                              for a, b in ((row0, j0), (row0, j1), (row1, j0), (row1, j1)))
+        ok = np.isfinite(d00)
+        for texel in (d01, d10, d11):
+            ok &= np.isfinite(texel)
         with np.errstate(invalid="ignore", divide="ignore"):
+            ux, uy = 1 - tx, 1 - ty
             if reciprocal:
                 # 1/z is affine across the screen on a plane (perspective): interpolate it
-                inv = (1 - ty) * ((1 - tx) / d00 + tx / d01) + ty * ((1 - tx) / d10 + tx / d11)
-                bil = 1.0 / inv
+                inv = uy * (ux / d00 + tx / d01) + ty * (ux / d10 + tx / d11)
+                d = np.divide(1.0, inv, out=inv)
             else:
-                bil = (1 - ty) * ((1 - tx) * d00 + tx * d01) + ty * ((1 - tx) * d10 + tx * d11)
-        d = np.where(ok, bil, d)
+                d = uy * (ux * d00 + tx * d01) + ty * (ux * d10 + tx * d11)
+        if not ok.all():
+            # the nearest texel where one of the four is background
+            near = ~ok
+            d[near] = flat[_nearest_index(xs[near], ys[near], H, W)]
     else:
+        d = flat[_nearest_index(xs, ys, H, W)].astype(np.float64, copy=False)
         ok = np.ones(d.shape, dtype=bool)
     if offscreen == "open":
-        d = np.where(outside, np.inf, d)
-    else:
-        d = np.where(finite, d, np.inf)
-    return (d, ok | ~finite | (outside & (offscreen == "open"))) if with_mask else d
+        outside = (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H)
+        if not all_finite:
+            outside |= ~finite
+        d[outside] = np.inf
+        if with_mask:
+            ok |= outside
+    elif not all_finite:
+        d[~finite] = np.inf
+        if with_mask:
+            ok |= ~finite
+    return (d, ok) if with_mask else d
 
 
 def warper(px: Pixels, radius: float):

@@ -353,8 +353,9 @@ ACOS_COEFFICIENTS = (1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046, 0
                      0.0066700901, -0.0012624911)
 
 
-def _acos(c):
-    """arccos of ``c`` clamped to [-1, 1] (A&S 4.4.46, :data:`ACOS_COEFFICIENTS`); overwrites ``c``.
+def _acos(c, out=None):
+    """arccos of ``c`` clamped to [-1, 1] (A&S 4.4.46, :data:`ACOS_COEFFICIENTS`), in ``out``
+    (a new array without it); overwrites ``c``.
 
     Examples
     --------
@@ -363,24 +364,26 @@ def _acos(c):
     >>> bool(np.max(np.abs(_acos(x.copy()) - np.arccos(x))) < 2.5e-8)
     True
     """
-    c = np.minimum(np.maximum(c, -1.0, out=c), 1.0, out=c)
+    c = np.clip(c, -1.0, 1.0, out=c)
     negative = c < 0
     x = np.abs(c, out=c)
-    r = np.full_like(x, ACOS_COEFFICIENTS[-1])
-    for a in ACOS_COEFFICIENTS[-2::-1]:
+    # Horner's scheme from a_7 down
+    r = np.multiply(x, ACOS_COEFFICIENTS[-1], out=out)
+    r += ACOS_COEFFICIENTS[-2]
+    for a in ACOS_COEFFICIENTS[-3::-1]:
         r *= x
         r += a
     np.subtract(1.0, x, out=x)
     r *= np.sqrt(x, out=x)
     # arccos(-x) = pi - arccos(x)
-    return np.where(negative, np.pi - r, r)
+    return np.subtract(np.pi, r, out=r, where=negative)
 
 
 def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals, offscreen):
-    """The angle from v (k,) of the tap's back point (``dv``: the tap's offset from p along v)."""
+    """The angle from v (k,) of the tap's back point (``dv``: the tap's offset from p along v),
+    for a thickness that varies per tap (``linear``) or read from the layers (``layers``);
+    :class:`_Kernel` computes the constant thicknesses in place."""
     if not layers:
-        if np.isinf(thickness):
-            return np.full(len(px.index), np.pi)
         T = thickness * tap.d if linear else thickness
         # Bevy processSample, SSRT3 HorizonSampling, Blender: the tap moved away from the
         # camera by T along p's view vector (unit): (delta - T v) . v = dv - T and
@@ -406,61 +409,125 @@ def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals, offscre
     return np.where(length > 0, _acos(cos_b), 0.0)
 
 
+class _Kernel:
+    """VBAO's per-tap work on one chunk of pixels, with its (k,) work arrays allocated once:
+    every step runs in place on them (a chunk's taps are its whole per-pixel state)."""
+
+    def __init__(self, px, v, *, radius, thickness, linear, layers, thickness_far, sectors, touch, offscreen,
+                 intervals):
+        k = len(px.index)
+        self.px, self.v, self.radius, self.S = px, v, radius, sectors
+        self.thickness, self.linear, self.layers = thickness, linear, layers
+        self.thickness_far, self.touch, self.offscreen, self.intervals = thickness_far, touch, offscreen, intervals
+        self.dv, self.tmp, self.alpha_f, self.alpha_b, self.lo, self.hi = (np.empty(k) for _ in range(6))
+        self.i0, self.i1 = np.empty(k, dtype=np.intp), np.empty(k, dtype=np.intp)
+        self.m0, self.m1 = np.empty(k, dtype=np.uint64), np.empty(k, dtype=np.uint64)
+
+    def angles(self, tap):
+        """The front and back angles (k,) from v of the tap's occluder, alpha_f <= alpha_b
+        (Therrien et al. 2023, Algorithm 1), in :attr:`alpha_f` and :attr:`alpha_b`."""
+        vx, vy, vz = self.v
+        ddx, ddy, ddz = tap.delta
+        dv, tmp, alpha_f, alpha_b = self.dv, self.tmp, self.alpha_f, self.alpha_b
+        # dv = delta . v (summed in x, y, z order)
+        np.multiply(ddx, vx, out=dv)
+        dv += np.multiply(ddy, vy, out=tmp)
+        dv += np.multiply(ddz, vz, out=tmp)
+        _acos(np.divide(dv, tap.dist, out=tmp), out=alpha_f)
+        T = self.thickness
+        if self.layers or self.linear:
+            alpha_b[:] = _back_angle(self.px, tap, self.v, dv, thickness=T, linear=self.linear, layers=self.layers,
+                                     intervals=self.intervals, offscreen=self.offscreen)
+        elif np.isinf(T):
+            alpha_b.fill(np.pi)
+        else:
+            # Bevy processSample, SSRT3 HorizonSampling, Blender: the tap moved away from the
+            # camera by T along p's view vector (unit): (delta - T v) . v = dv - T and
+            # |delta - T v|^2 = dist^2 - 2 T dv + T^2
+            length = np.multiply(tap.dist, tap.dist, out=self.lo)
+            length -= np.multiply(dv, 2.0 * T, out=tmp)
+            length += T * T
+            np.sqrt(np.maximum(length, 1e-300, out=length), out=length)
+            _acos(np.divide(np.subtract(dv, T, out=tmp), length, out=tmp), out=alpha_b)
+        np.maximum(alpha_b, alpha_f, out=alpha_b)
+        if self.thickness_far > 0:
+            # Blender: the back horizon at least thickness_far past the front one
+            np.maximum(alpha_b, np.add(alpha_f, self.thickness_far, out=tmp), out=alpha_b)
+
+    def mark(self, tap, sign, per_radian, origin):
+        """The bitmask (k,) uint64 of the sectors the tap's occluder marks (none where the
+        tap is not used): the angles of :meth:`angles`, signed (positive towards t), to
+        sectors, S ((theta - gamma) / pi + 1/2) = theta per_radian + origin (Algorithm 1;
+        Bevy's n, Blender's ratio)."""
+        S, lo, hi = self.S, self.lo, self.hi
+        np.multiply(self.alpha_f if sign > 0 else self.alpha_b, per_radian, out=lo)
+        np.multiply(self.alpha_b if sign > 0 else self.alpha_f, per_radian, out=hi)
+        if sign > 0:
+            lo += origin
+            hi += origin
+        else:
+            # theta = -alpha: -(alpha per_radian) + origin
+            np.subtract(origin, lo, out=lo)
+            np.subtract(origin, hi, out=hi)
+        if self.touch:
+            # Bevy updateSectors / SSRT3 ComputeOccludedBitfield: from floor(a),
+            # ceil(b - a) sectors, a and b clamped to the hemisphere
+            np.clip(lo, 0.0, S, out=lo)
+            np.clip(hi, 0.0, S, out=hi)
+            hi -= lo
+            np.ceil(hi, out=hi)
+            np.floor(lo, out=lo)
+            hi += lo
+            np.minimum(hi, S, out=hi)
+        else:
+            # the sectors whose centre i + 1/2 lies in [lo, hi]
+            lo -= 0.5
+            np.clip(np.ceil(lo, out=lo), 0.0, S, out=lo)
+            hi -= 0.5
+            np.floor(hi, out=hi)
+            hi += 1.0
+            np.maximum(np.minimum(hi, S, out=hi), lo, out=hi)
+        # Blender: a tap counts when its front point lies within the radius
+        skip = tap.dist > self.radius
+        skip |= ~tap.ok
+        np.copyto(hi, lo, where=skip)
+        np.copyto(self.i0, lo, casting="unsafe")
+        np.copyto(self.i1, hi, casting="unsafe")
+        mask = np.take(_LOW, self.i1, out=self.m1)
+        mask ^= np.take(_LOW, self.i0, out=self.m0)
+        return mask
+
+
 def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickness_far, weighting, sectors,
                  touch, step_power, fetch, offscreen, texture, intervals, r1_jitter=False):
     """VBAO of one chunk of pixels (see :func:`vbao`): loops over slices and steps only."""
     k = len(px.index)
     v, b1, b2 = C.view_basis(px)
-    vx, vy, vz = v
     u_slice, u_step, has_noise = C.slice_noise(px, texture)
     S = sectors
     weights = _Weights(S, weighting)
+    work = _Kernel(px, v, radius=radius, thickness=thickness, linear=linear, layers=layers,
+                   thickness_far=thickness_far, sectors=S, touch=touch, offscreen=offscreen, intervals=intervals)
     visibility = np.zeros(k)
     weight_sum = np.zeros(k)
+    # theta -> sectors: S ((theta - gamma) / pi + 1/2) = theta per_radian + origin
+    per_radian = S / np.pi
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # the slices of GTAO (Jimenez et al. 2016, Algorithm 1)
             phi = np.pi * (s + u_slice) / slices
             sl = C.horizon_slice(px, phi, v, b1, b2, min_px=PIXEL_TOO_CLOSE)
             occluded = np.zeros(k, dtype=np.uint64)
-            # theta -> sectors: S ((theta - gamma) / pi + 1/2) = theta per_radian + origin
-            per_radian = S / np.pi
             origin = S * (0.5 - sl.gamma / np.pi)
             for j in range(steps):
                 u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and has_noise) else u_step
                 t = ((j + u) / steps) ** step_power + sl.min_s
                 for sign in (1.0, -1.0):
                     tap = C.horizon_tap(px, sl, sign * t, fetch=fetch, offscreen=offscreen)
-                    ddx, ddy, ddz = tap.delta
-                    # Blender: a tap counts when its front point lies within the radius
-                    use = tap.ok & (tap.dist <= radius)
-                    # Therrien et al. 2023, Algorithm 1: the front and back horizon angles from v
-                    dv = ddx * vx + ddy * vy + ddz * vz
-                    alpha_f = _acos(dv / tap.dist)
-                    alpha_b = _back_angle(px, tap, v, dv, thickness=thickness, linear=linear, layers=layers,
-                                          intervals=intervals, offscreen=offscreen)
-                    np.maximum(alpha_b, alpha_f, out=alpha_b)
-                    if thickness_far > 0:
-                        # Blender: the back horizon at least thickness_far past the front one
-                        np.maximum(alpha_b, alpha_f + thickness_far, out=alpha_b)
-                    # the signed angles theta (positive towards t) of the interval's ends, lo <= hi,
-                    # in sectors: S ((theta - gamma) / pi + 1/2) (Algorithm 1; Bevy's n, Blender's ratio)
-                    lo, hi = (alpha_f, alpha_b) if sign > 0 else (-alpha_b, -alpha_f)
-                    lo = lo * per_radian + origin
-                    hi = hi * per_radian + origin
-                    if touch:
-                        # Bevy updateSectors / SSRT3 ComputeOccludedBitfield: from floor(a),
-                        # ceil(b - a) sectors, a and b clamped to the hemisphere
-                        lo = np.minimum(np.maximum(lo, 0.0), S)
-                        hi = np.minimum(np.maximum(hi, 0.0), S)
-                        i0 = np.floor(lo)
-                        i1 = np.minimum(i0 + np.ceil(hi - lo), S)
-                    else:
-                        # the sectors whose centre i + 1/2 lies in [lo, hi]
-                        i0 = np.minimum(np.maximum(np.ceil(lo - 0.5), 0.0), S)
-                        i1 = np.maximum(np.minimum(np.floor(hi - 0.5) + 1.0, S), i0)
-                    i1 = np.where(use, i1, i0)
-                    occluded |= np.take(_LOW, i1.astype(np.intp)) ^ np.take(_LOW, i0.astype(np.intp))
+                    # Therrien et al. 2023, Algorithm 1: the front and back horizon angles
+                    # from v, then the sectors between them
+                    work.angles(tap)
+                    occluded |= work.mark(tap, sign, per_radian, origin)
             # the unmarked sectors, weighted
             slice_vis = weights.open_weight(occluded, sl)
             if weighting in ("cosine", "eevee"):
