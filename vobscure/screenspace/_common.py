@@ -100,7 +100,8 @@ class Pixels:
     @cached_property
     def center(self) -> np.ndarray:
         """(k, 2) continuous pixel coordinates (x, y) of the centres."""
-        c = np.empty((len(self.index), 2))
+        # stored column by column, as :attr:`p`
+        c = np.empty((2, len(self.index))).T
         c[:, 0] = self.col + 0.5
         c[:, 1] = self.row + 0.5
         return c
@@ -636,29 +637,58 @@ def view_basis(px: Pixels):
     return (vx, vy, vz), (b1x, b1y, b1z), (b2x, b2y, b2z)
 
 
-def slice_noise(px: Pixels, texture: np.ndarray | None):
-    """(u_slice, u_step), each (k,) in [0, 1): the slice rotation and the step jitter of each
-    pixel from a 3-D unit-vector noise texture (the azimuth of its (x, y) and its z are
-    independent and uniform, Archimedes); 1/2 for both without a texture. Also returns whether
-    there was noise."""
-    noise = noise_at(px, texture)
+@dataclass
+class SliceNoise:
+    """The per-pixel randomization of a horizon search (see :func:`slice_noise`).
+
+    ``u_step``: (k,) the step jitter in [0, 1); ``has_noise``: whether a texture was given;
+    ``texel``: (k,) each pixel's texel of the tiled texture (flat, row-major), None without
+    one; ``u_texel``: the slice rotation u in [0, 1) of every texel, None without a texture
+    (u = 1/2 for every pixel).
+    """
+
+    u_step: np.ndarray
+    has_noise: bool
+    texel: np.ndarray | None = None
+    u_texel: np.ndarray | None = None
+
+    def rotation(self, s: int, slices: int):
+        """(cos phi, sin phi) of slice ``s`` of ``slices``, phi = pi (s + u) / slices
+        (Jimenez et al. 2016, Algorithm 1): (k,) arrays, or floats without a texture. The
+        angle is evaluated once per texel and gathered: the same numbers as per pixel."""
+        if self.texel is None:
+            phi = np.pi * (s + 0.5) / slices
+            return np.cos(phi), np.sin(phi)
+        phi = np.pi * (s + self.u_texel) / slices
+        return np.take(np.cos(phi), self.texel), np.take(np.sin(phi), self.texel)
+
+
+def slice_noise(px: Pixels, texture: np.ndarray | None) -> SliceNoise:
+    """The slice rotation and the step jitter of each pixel from a 3-D unit-vector noise
+    texture (:class:`SliceNoise`): the azimuth of a texel's (x, y) and its z are independent
+    and uniform (Archimedes), u_slice = azimuth / (2 pi) and u_step = (z + 1) / 2; 1/2 for
+    both without a texture."""
     k = len(px.index)
-    if noise is None:
-        u_slice = u_step = np.full(k, 0.5)
-    else:
-        u_slice = (np.arctan2(noise[:, 1], noise[:, 0]) / (2.0 * np.pi)) % 1.0
-        u_step = np.clip(0.5 * (noise[:, 2] + 1.0), 0.0, 1.0 - 1e-12)
-    return u_slice, u_step, noise is not None
+    if texture is None:
+        return SliceNoise(u_step=np.full(k, 0.5), has_noise=False)
+    size = texture.shape[0]
+    # the texel of each pixel, as noise_at reads it
+    texel = (px.row % size) * size + px.col % size
+    noise = texture.reshape(-1, 3)
+    u_slice = (np.arctan2(noise[:, 1], noise[:, 0]) / (2.0 * np.pi)) % 1.0
+    u_step = np.clip(0.5 * (noise[:, 2] + 1.0), 0.0, 1.0 - 1e-12)
+    return SliceNoise(u_step=np.take(u_step, texel), has_noise=True, texel=texel, u_texel=u_slice)
 
 
-def horizon_slice(px: Pixels, phi, v, b1, b2, *, min_px: float) -> Slice:
-    """The slice at view-space angle ``phi`` around v (see :class:`Slice`)."""
+def horizon_slice(px: Pixels, rotation, v, b1, b2, *, min_px: float) -> Slice:
+    """The slice at view-space angle phi around v (see :class:`Slice`); ``rotation`` is
+    (cos phi, sin phi) (:meth:`SliceNoise.rotation`)."""
     vx, vy, vz = v
     n = px.n
     nx, ny, nz = n[:, 0], n[:, 1], n[:, 2]
     rx, ry = px.ray
     # Algorithm 1: the slice direction t is cos phi b1 + sin phi b2, orthogonal to v
-    cphi, sphi = np.cos(phi), np.sin(phi)
+    cphi, sphi = rotation
     tx, ty, tz = cphi * b1[0] + sphi * b2[0], cphi * b1[1] + sphi * b2[1], cphi * b1[2] + sphi * b2[2]
     # the slice's axis (normal of the plane) and the normal projected onto the plane
     ax, ay, az = ty * vz - tz * vy, tz * vx - tx * vz, tx * vy - ty * vx
@@ -705,19 +735,33 @@ def horizon_tap(px: Pixels, sl: Slice, s, *, fetch: str, offscreen: str) -> Tap:
     de = s * sl.oy                   # rows up
     if fetch == "nearest":
         # the tap snapped to the centre of the pixel it falls in
-        dj, de = np.rint(dj), np.rint(de)
-    x, y = px.col + 0.5 + dj, px.row + 0.5 - de
+        dj, de = np.rint(dj, out=dj), np.rint(de, out=de)
+    centre = px.center
+    x, y = centre[:, 0] + dj, centre[:, 1] - de
     d = fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
     p = px.p
-    ok = np.isfinite(d) & (d > 0) & ((dj != 0) | (de != 0))
-    d = np.where(ok, d, p[:, 2])
+    ok = np.isfinite(d)
+    ok &= d > 0
+    moved = dj != 0
+    moved |= de != 0
+    ok &= moved
+    np.copyto(d, p[:, 2], where=~ok)
     # the tap's view-space position (the pixel's ray shifted to the tap), minus p
     srx, sry = shift_ray(*px.ray, dj, -de, px.fx, px.fy)
-    sx, sy = ray_to_xy(srx, sry, d, px.perspective)
-    ddx, ddy, ddz = sx - p[:, 0], sy - p[:, 1], d - p[:, 2]
-    dist = np.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
+    if px.perspective:
+        # (a Z, b Z) in new arrays: the offsets from p overwrite them
+        ddx, ddy = ray_to_xy(srx, sry, d, True)
+        ddx -= p[:, 0]
+        ddy -= p[:, 1]
+    else:
+        ddx, ddy = srx - p[:, 0], sry - p[:, 1]
+    ddz = d - p[:, 2]
+    dist = ddx * ddx
+    dist += np.multiply(ddy, ddy, out=dj)
+    dist += np.multiply(ddz, ddz, out=dj)
+    np.sqrt(dist, out=dist)
     ok &= dist > 0
-    dist = np.where(ok, dist, 1.0)
+    np.copyto(dist, 1.0, where=~ok)
     return Tap(ok=ok, d=d, delta=(ddx, ddy, ddz), dist=dist, ray=(srx, sry), x=x, y=y)
 
 

@@ -308,11 +308,17 @@ class _Weights:
     def _sum(self, mask):
         """The table sums over the bits set in ``mask`` (k,) uint64: a list of (k,) arrays,
         one per table column."""
+        # the mask's bytes, least significant first, gathered from without shifting
+        octets = np.asarray(mask, dtype="<u8").view(np.uint8).reshape(-1, 8)
         out = None
         for b, columns in enumerate(self.table):
-            byte = ((mask >> np.uint64(8 * b)) & np.uint64(255)).astype(np.intp)
+            byte = octets[:, b]
             parts = [np.take(c, byte) for c in columns]
-            out = parts if out is None else [o + q for o, q in zip(out, parts)]
+            if out is None:
+                out = parts
+            else:
+                for o, q in zip(out, parts):
+                    o += q
         return out
 
     def open_weight(self, occluded, sl):
@@ -503,7 +509,8 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
     """VBAO of one chunk of pixels (see :func:`vbao`): loops over slices and steps only."""
     k = len(px.index)
     v, b1, b2 = C.view_basis(px)
-    u_slice, u_step, has_noise = C.slice_noise(px, texture)
+    noise = C.slice_noise(px, texture)
+    u_step, has_noise = noise.u_step, noise.has_noise
     S = sectors
     weights = _Weights(S, weighting)
     work = _Kernel(px, v, radius=radius, thickness=thickness, linear=linear, layers=layers,
@@ -515,8 +522,7 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # the slices of GTAO (Jimenez et al. 2016, Algorithm 1)
-            phi = np.pi * (s + u_slice) / slices
-            sl = C.horizon_slice(px, phi, v, b1, b2, min_px=PIXEL_TOO_CLOSE)
+            sl = C.horizon_slice(px, noise.rotation(s, slices), v, b1, b2, min_px=PIXEL_TOO_CLOSE)
             occluded = np.zeros(k, dtype=np.uint64)
             origin = S * (0.5 - sl.gamma / np.pi)
             for j in range(steps):
