@@ -30,7 +30,7 @@ Not read here: three.js ``SSGINode`` and Filament's implementation.
 
 from __future__ import annotations
 
-from functools import partial
+from functools import lru_cache, partial
 
 import numpy as np
 
@@ -426,8 +426,8 @@ class _Kernel:
         self.thickness, self.linear, self.layers = thickness, linear, layers
         self.thickness_far, self.touch, self.offscreen, self.intervals = thickness_far, touch, offscreen, intervals
         self.dv, self.tmp, self.alpha_f, self.alpha_b, self.lo, self.hi = (np.empty(k) for _ in range(6))
-        self.i0, self.i1 = np.empty(k, dtype=np.intp), np.empty(k, dtype=np.intp)
-        self.m0, self.m1 = np.empty(k, dtype=np.uint64), np.empty(k, dtype=np.uint64)
+        self.index, self.mask = np.empty(k, dtype=np.intp), np.empty(k, dtype=np.uint64)
+        self.runs = _run_masks(sectors)
 
     def angles(self, tap):
         """The front and back angles (k,) from v of the tap's occluder, alpha_f <= alpha_b
@@ -493,15 +493,25 @@ class _Kernel:
             np.floor(hi, out=hi)
             hi += 1.0
             np.maximum(np.minimum(hi, S, out=hi), lo, out=hi)
-        # Blender: a tap counts when its front point lies within the radius
-        skip = tap.dist > self.radius
-        skip |= ~tap.ok
-        np.copyto(hi, lo, where=skip)
-        np.copyto(self.i0, lo, casting="unsafe")
-        np.copyto(self.i1, hi, casting="unsafe")
-        mask = np.take(_LOW, self.i1, out=self.m1)
-        mask ^= np.take(_LOW, self.i0, out=self.m0)
-        return mask
+        # Blender: a tap counts when its front point lies within the radius; a tap not
+        # counted reads the empty interval (0, 0)
+        use = tap.dist <= self.radius
+        use &= tap.ok
+        lo *= S + 1
+        lo += hi
+        lo *= use
+        np.copyto(self.index, lo, casting="unsafe")
+        return np.take(self.runs, self.index, out=self.mask)
+
+
+@lru_cache(maxsize=None)
+def _run_masks(sectors: int) -> np.ndarray:
+    """((sectors + 1)^2,) uint64: entry i0 (sectors + 1) + i1 the bitmask of the sectors
+    i0 .. i1 - 1 (empty for i1 <= i0)."""
+    i0, i1 = np.divmod(np.arange((sectors + 1) ** 2), sectors + 1)
+    masks = _LOW[np.maximum(i1, i0)] ^ _LOW[i0]
+    masks.flags.writeable = False
+    return masks
 
 
 def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickness_far, weighting, sectors,
