@@ -304,6 +304,16 @@ class _Weights:
         # per byte: the (256,) sums of dP and of dQ
         self.table = [tuple(np.ascontiguousarray(bits @ dPQ[8 * b:8 * b + 8, c]) for c in (0, 1))
                       for b in range(nbytes)]
+        # per j0 in 0 .. S + 1: the masks of the sectors below and above theta = 0, the bit of
+        # the sector across it (0 when none), and that sector's (P_{j0} + P_{j0-1}, Q_{j0} + Q_{j0-1})
+        j0 = np.arange(sectors + 2)
+        self.below = _LOW[np.maximum(j0 - 1, 0)]
+        self.above = ~_LOW[np.minimum(j0, sectors)]
+        jc = np.clip(j0 - 1, 0, sectors - 1)
+        across = (j0 >= 1) & (j0 <= sectors)
+        self.across = np.where(across, np.left_shift(np.uint64(1), jc.astype(np.uint64)), np.uint64(0))
+        jn = np.minimum(jc + 1, sectors)
+        self.across_PQ = tuple(PQ[jn, c] + PQ[jc, c] for c in (0, 1))
 
     def _sum(self, mask):
         """The table sums over the bits set in ``mask`` (k,) uint64: a list of (k,) arrays,
@@ -323,25 +333,27 @@ class _Weights:
 
     def open_weight(self, occluded, sl):
         """(k,) the weighted sum of the sectors not set in ``occluded`` (k,) of slice ``sl``."""
-        open_bits = ~occluded & self.full
+        open_bits = np.invert(occluded)
+        open_bits &= self.full
         if self.weighting in ("bitcount", "eevee"):
             return self._sum(open_bits)[0]
         S = self.S
         # j0: the boundaries below theta = 0 (phi_j < -gamma), 0 .. S + 1
         j0 = np.clip(np.ceil((0.5 * np.pi - sl.gamma) * S / np.pi), 0, S + 1).astype(np.intp)
-        below = open_bits & _LOW[np.maximum(j0 - 1, 0)]
-        above = open_bits & ~_LOW[np.minimum(j0, S)]
-        (pa, qa), (pb, qb) = self._sum(above), self._sum(below)
-        # the sector across theta = 0
-        across = (j0 >= 1) & (j0 <= S)
-        jc = np.clip(j0 - 1, 0, S - 1)
-        bit = ((open_bits >> jc.astype(np.uint64)) & np.uint64(1)).astype(bool) & across
-        P, Q = self.PQ[:, 0], self.PQ[:, 1]
-        jn = np.minimum(jc + 1, S)
-        p = pa - pb + np.where(bit, np.take(P, jn) + np.take(P, jc), 0.0)
-        q = qa - qb + np.where(bit, np.take(Q, jn) + np.take(Q, jc), 0.0)
+        (pa, qa) = self._sum(np.take(self.above, j0) & open_bits)
+        (pb, qb) = self._sum(np.take(self.below, j0) & open_bits)
+        # the sector across theta = 0, where open (a product with the bit, not a select: the
+        # terms are finite)
+        bit = (np.take(self.across, j0) & open_bits) != 0
+        p = pa - pb
+        p += np.take(self.across_PQ[0], j0) * bit
+        q = qa - qb
+        q += np.take(self.across_PQ[1], j0) * bit
         R = 0.5 * sl.gamma * sl.sin_g if self.weighting == "cosine" else 0.5
-        return sl.cos_g * p + sl.sin_g * q + np.where(bit, 2.0 * R, 0.0)
+        out = sl.cos_g * p
+        out += sl.sin_g * q
+        out += (2.0 * R) * bit
+        return out
 
 
 def _layer_back(px, tap, intervals, offscreen):
