@@ -301,9 +301,13 @@ class _Weights:
         self.PQ = PQ                                                               # (S + 1, 2)
         dPQ = np.zeros((8 * nbytes, 2))
         dPQ[:sectors] = np.diff(PQ, axis=0)
-        # per byte: the (256,) sums of dP and of dQ
-        self.table = [tuple(np.ascontiguousarray(bits @ dPQ[8 * b:8 * b + 8, c]) for c in (0, 1))
-                      for b in range(nbytes)]
+        # per byte: the (256,) sums of dP and of dQ, as the real and imaginary parts of one
+        # complex table (one gather reads both; complex sums add the parts separately)
+        self.table = []
+        for b in range(nbytes):
+            table = np.empty(256, dtype=np.complex128)
+            table.real, table.imag = bits @ dPQ[8 * b:8 * b + 8, 0], bits @ dPQ[8 * b:8 * b + 8, 1]
+            self.table.append((table,))
         # per j0 in 0 .. S + 1: the masks of the sectors below and above theta = 0, the bit of
         # the sector across it (0 when none), and that sector's (P_{j0} + P_{j0-1}, Q_{j0} + Q_{j0-1})
         j0 = np.arange(sectors + 2)
@@ -317,7 +321,7 @@ class _Weights:
 
     def _sum(self, mask):
         """The table sums over the bits set in ``mask`` (k,) uint64: a list of (k,) arrays,
-        one per table column."""
+        one per table column (complex for ``"cosine"`` and ``"uniform"``: dP + i dQ)."""
         # the mask's bytes, least significant first, gathered from without shifting
         octets = np.asarray(mask, dtype="<u8").view(np.uint8).reshape(-1, 8)
         out = None
@@ -340,15 +344,14 @@ class _Weights:
         S = self.S
         # j0: the boundaries below theta = 0 (phi_j < -gamma), 0 .. S + 1
         j0 = np.clip(np.ceil((0.5 * np.pi - sl.gamma) * S / np.pi), 0, S + 1).astype(np.intp)
-        (pa, qa) = self._sum(np.take(self.above, j0) & open_bits)
-        (pb, qb) = self._sum(np.take(self.below, j0) & open_bits)
+        # (sum of dP) + i (sum of dQ) above theta = 0, less the same below
+        pq = self._sum(np.take(self.above, j0) & open_bits)[0]
+        pq -= self._sum(np.take(self.below, j0) & open_bits)[0]
         # the sector across theta = 0, where open (a product with the bit, not a select: the
         # terms are finite)
         bit = (np.take(self.across, j0) & open_bits) != 0
-        p = pa - pb
-        p += np.take(self.across_PQ[0], j0) * bit
-        q = qa - qb
-        q += np.take(self.across_PQ[1], j0) * bit
+        p = pq.real + np.take(self.across_PQ[0], j0) * bit
+        q = pq.imag + np.take(self.across_PQ[1], j0) * bit
         R = 0.5 * sl.gamma * sl.sin_g if self.weighting == "cosine" else 0.5
         out = sl.cos_g * p
         out += sl.sin_g * q
@@ -437,7 +440,11 @@ class _Kernel:
         self.px, self.v, self.radius, self.S = px, v, radius, sectors
         self.thickness, self.linear, self.layers = thickness, linear, layers
         self.thickness_far, self.touch, self.offscreen, self.intervals = thickness_far, touch, offscreen, intervals
-        self.dv, self.tmp, self.alpha_f, self.alpha_b, self.lo, self.hi = (np.empty(k) for _ in range(6))
+        self.dv, self.tmp, self.lo, self.hi = (np.empty(k) for _ in range(4))
+        # the cosines and the angles of the front (row 0) and back (row 1) points: one arccos
+        # evaluates both
+        self.cosines, self.alpha = np.empty((2, k)), np.empty((2, k))
+        self.alpha_f, self.alpha_b = self.alpha
         self.index, self.mask = np.empty(k, dtype=np.intp), np.empty(k, dtype=np.uint64)
         self.runs = _run_masks(sectors)
 
@@ -451,12 +458,15 @@ class _Kernel:
         np.multiply(ddx, vx, out=dv)
         dv += np.multiply(ddy, vy, out=tmp)
         dv += np.multiply(ddz, vz, out=tmp)
-        _acos(np.divide(dv, tap.dist, out=tmp), out=alpha_f)
+        cos_f, cos_b = self.cosines
+        np.divide(dv, tap.dist, out=cos_f)
         T = self.thickness
         if self.layers or self.linear:
+            _acos(cos_f, out=alpha_f)
             alpha_b[:] = _back_angle(self.px, tap, self.v, dv, thickness=T, linear=self.linear, layers=self.layers,
                                      intervals=self.intervals, offscreen=self.offscreen)
         elif np.isinf(T):
+            _acos(cos_f, out=alpha_f)
             alpha_b.fill(np.pi)
         else:
             # Bevy processSample, SSRT3 HorizonSampling, Blender: the tap moved away from the
@@ -466,7 +476,9 @@ class _Kernel:
             length -= np.multiply(dv, 2.0 * T, out=tmp)
             length += T * T
             np.sqrt(np.maximum(length, 1e-300, out=length), out=length)
-            _acos(np.divide(np.subtract(dv, T, out=tmp), length, out=tmp), out=alpha_b)
+            np.subtract(dv, T, out=cos_b)
+            cos_b /= length
+            _acos(self.cosines.reshape(-1), out=self.alpha.reshape(-1))
         np.maximum(alpha_b, alpha_f, out=alpha_b)
         if self.thickness_far > 0:
             # Blender: the back horizon at least thickness_far past the front one
@@ -551,7 +563,7 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
                 u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and has_noise) else u_step
                 t = ((j + u) / steps) ** step_power + sl.min_s
                 for sign in (1.0, -1.0):
-                    tap = C.horizon_tap(px, sl, sign * t, fetch=fetch, offscreen=offscreen)
+                    tap = C.horizon_tap(px, sl, t if sign > 0 else -t, fetch=fetch, offscreen=offscreen)
                     # Therrien et al. 2023, Algorithm 1: the front and back horizon angles
                     # from v, then the sectors between them
                     work.angles(tap)
