@@ -59,15 +59,13 @@ Per configuration:
 The registry's texels against the counted reads
 -----------------------------------------------
 The two count different things, and differ by fixed factors (measured: line 1.000, point
-1.250, area 3.000, clamped area 10.000, at every sample count):
+1.000, area 3.000, clamped area 10.000, at every sample count):
 
 - **nearest** (``vo_line``): one read per texel, reads = texels.
-- **bilinear** (``vo_point``): 5 reads per tap against the model's 4 texels. The depth fetch
-  first gathers the texel containing the tap (the value it falls back to where one of the
-  2 x 2 neighbours is background), then the 2 x 2 texels around it; the first is always
-  one of the four, so the tap touches 4 distinct texels (what a GPU's bilinear fetch
-  reads) and re-reads one of them. The fallback gather is an implementation cost of the
-  NumPy fetch (one more gather pass per tap), not more memory touched.
+- **bilinear** (``vo_point``, ``gtao``, ``vbao``): 4 reads per tap, the 2 x 2 texels around
+  it (what a GPU's bilinear fetch reads); the texel containing the tap, one of the four, is
+  gathered again only where one of them is background (the value the fetch falls back to
+  there): none on the Cornell box's frames, whose pixels are all valid.
 - **mip-map lookup** (``vo_area``): 54 reads per lookup = 18 texels x 3 channels (coverage,
   mean, central second moment of 1/z), 180 = 18 x 10 channels with ``normal_clamp`` (the
   pixel positions' means and the 3 x 3 central moments of (q, X, Y) are mipped too). The
@@ -394,7 +392,7 @@ def count_reads(radius: float) -> dict:
         print(f"  {b.name:<22} {b.config.fetch_used:>9} {b.config.taps:7d} {b.config.texels:9d} "
               f"{counted} {ratio}")
     print("  (reads count array elements gathered, texels count distinct depth texels: a bilinear\n"
-          "   tap also gathers the nearest texel, one of its 4, as the background fallback: 5/4;\n"
+          "   tap gathers the nearest texel, one of its 4, again where a neighbour is background;\n"
           "   a mip texel holds 3 moment channels, 10 with normal_clamp: 3x and 10x)")
     return reads
 

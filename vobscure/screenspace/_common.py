@@ -100,7 +100,8 @@ class Pixels:
     @cached_property
     def center(self) -> np.ndarray:
         """(k, 2) continuous pixel coordinates (x, y) of the centres."""
-        c = np.empty((len(self.index), 2))
+        # stored column by column, as :attr:`p`
+        c = np.empty((2, len(self.index))).T
         c[:, 0] = self.col + 0.5
         c[:, 1] = self.row + 0.5
         return c
@@ -454,6 +455,13 @@ def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None,
                 yield index[c:c + chunk], texture[a, b]
 
 
+def _nearest_index(xs, ys, H: int, W: int) -> np.ndarray:
+    """Flat index of the pixel containing (xs, ys) (finite coordinates), clamped to the image."""
+    j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
+    i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
+    return i * W + j
+
+
 def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str = "nearest",
                 offscreen: str = "clamp", reciprocal: bool = False, with_mask: bool = False):
     """Depth-buffer values at continuous pixel coordinates (x, y) (float64).
@@ -461,47 +469,68 @@ def fetch_depth(depth: np.ndarray, x: np.ndarray, y: np.ndarray, *, fetch: str =
     ``fetch="nearest"``: the pixel containing (x, y). ``"bilinear"``: interpolation between
     the four nearest pixel centres, of 1/z when ``reciprocal`` (perspective: exact on
     planes) and of z otherwise; where any of them is background the nearest value is used
-    (interpolating towards +inf would invent geometry); ``with_mask`` also returns where
-    the bilinear value was used.
+    (interpolating towards +inf would invent geometry; that pixel is one of the four, read
+    again only there); ``with_mask`` also returns where the bilinear value was used.
     ``offscreen="clamp"``: coordinates outside the image read the nearest border pixel;
     ``"open"``: they read background (+inf), i.e. empty space. Non-finite coordinates
     (a point behind a perspective camera) read background.
     """
     H, W = depth.shape
-    finite = np.isfinite(x) & np.isfinite(y)
-    xs = np.where(finite, x, 0.0)
-    ys = np.where(finite, y, 0.0)
-    outside = (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H) | ~finite
     flat = depth.reshape(-1)
-    j = np.clip(np.floor(xs), 0, W - 1).astype(np.intp)
-    i = np.clip(np.floor(ys), 0, H - 1).astype(np.intp)
-    d = flat[i * W + j].astype(np.float64, copy=False)
+    finite = np.isfinite(x)
+    finite &= np.isfinite(y)
+    all_finite = bool(finite.all())
+    if all_finite:
+        xs, ys = x, y
+    else:
+        xs = np.where(finite, x, 0.0)
+        ys = np.where(finite, y, 0.0)
     if fetch == "bilinear":
         fx = np.clip(xs - 0.5, 0, W - 1)
         fy = np.clip(ys - 0.5, 0, H - 1)
-        j0 = np.floor(fx).astype(np.intp)
-        i0 = np.floor(fy).astype(np.intp)
+        # the texel below and left of (x, y) and the weights of its neighbours
+        j0 = np.floor(fx)
+        i0 = np.floor(fy)
+        tx = np.subtract(fx, j0, out=fx)
+        ty = np.subtract(fy, i0, out=fy)
+        j0 = j0.astype(np.intp)
+        i0 = i0.astype(np.intp)
         j1 = np.minimum(j0 + 1, W - 1)
-        i1 = np.minimum(i0 + 1, H - 1)
-        tx, ty = fx - j0, fy - i0
-        d00, d01, d10, d11 = (flat[a * W + b].astype(np.float64, copy=False)
-                              for a, b in ((i0, j0), (i0, j1), (i1, j0), (i1, j1)))
-        ok = np.isfinite(d00) & np.isfinite(d01) & np.isfinite(d10) & np.isfinite(d11)
+        row0 = i0 * W
+        row1 = np.minimum(i0 + 1, H - 1)
+        row1 *= W
+        d00, d01, d10, d11 = (flat[a + b].astype(np.float64, copy=False)
+                              for a, b in ((row0, j0), (row0, j1), (row1, j0), (row1, j1)))
+        ok = np.isfinite(d00)
+        for texel in (d01, d10, d11):
+            ok &= np.isfinite(texel)
         with np.errstate(invalid="ignore", divide="ignore"):
+            ux, uy = 1 - tx, 1 - ty
             if reciprocal:
                 # 1/z is affine across the screen on a plane (perspective): interpolate it
-                inv = (1 - ty) * ((1 - tx) / d00 + tx / d01) + ty * ((1 - tx) / d10 + tx / d11)
-                bil = 1.0 / inv
+                inv = uy * (ux / d00 + tx / d01) + ty * (ux / d10 + tx / d11)
+                d = np.divide(1.0, inv, out=inv)
             else:
-                bil = (1 - ty) * ((1 - tx) * d00 + tx * d01) + ty * ((1 - tx) * d10 + tx * d11)
-        d = np.where(ok, bil, d)
+                d = uy * (ux * d00 + tx * d01) + ty * (ux * d10 + tx * d11)
+        if not ok.all():
+            # the nearest texel where one of the four is background
+            near = ~ok
+            d[near] = flat[_nearest_index(xs[near], ys[near], H, W)]
     else:
+        d = flat[_nearest_index(xs, ys, H, W)].astype(np.float64, copy=False)
         ok = np.ones(d.shape, dtype=bool)
     if offscreen == "open":
-        d = np.where(outside, np.inf, d)
-    else:
-        d = np.where(finite, d, np.inf)
-    return (d, ok | ~finite | (outside & (offscreen == "open"))) if with_mask else d
+        outside = (xs < 0) | (xs >= W) | (ys < 0) | (ys >= H)
+        if not all_finite:
+            outside |= ~finite
+        d[outside] = np.inf
+        if with_mask:
+            ok |= outside
+    elif not all_finite:
+        d[~finite] = np.inf
+        if with_mask:
+            ok |= ~finite
+    return (d, ok) if with_mask else d
 
 
 def warper(px: Pixels, radius: float):
@@ -608,29 +637,58 @@ def view_basis(px: Pixels):
     return (vx, vy, vz), (b1x, b1y, b1z), (b2x, b2y, b2z)
 
 
-def slice_noise(px: Pixels, texture: np.ndarray | None):
-    """(u_slice, u_step), each (k,) in [0, 1): the slice rotation and the step jitter of each
-    pixel from a 3-D unit-vector noise texture (the azimuth of its (x, y) and its z are
-    independent and uniform, Archimedes); 1/2 for both without a texture. Also returns whether
-    there was noise."""
-    noise = noise_at(px, texture)
+@dataclass
+class SliceNoise:
+    """The per-pixel randomization of a horizon search (see :func:`slice_noise`).
+
+    ``u_step``: (k,) the step jitter in [0, 1); ``has_noise``: whether a texture was given;
+    ``texel``: (k,) each pixel's texel of the tiled texture (flat, row-major), None without
+    one; ``u_texel``: the slice rotation u in [0, 1) of every texel, None without a texture
+    (u = 1/2 for every pixel).
+    """
+
+    u_step: np.ndarray
+    has_noise: bool
+    texel: np.ndarray | None = None
+    u_texel: np.ndarray | None = None
+
+    def rotation(self, s: int, slices: int):
+        """(cos phi, sin phi) of slice ``s`` of ``slices``, phi = pi (s + u) / slices
+        (Jimenez et al. 2016, Algorithm 1): (k,) arrays, or floats without a texture. The
+        angle is evaluated once per texel and gathered: the same numbers as per pixel."""
+        if self.texel is None:
+            phi = np.pi * (s + 0.5) / slices
+            return np.cos(phi), np.sin(phi)
+        phi = np.pi * (s + self.u_texel) / slices
+        return np.take(np.cos(phi), self.texel), np.take(np.sin(phi), self.texel)
+
+
+def slice_noise(px: Pixels, texture: np.ndarray | None) -> SliceNoise:
+    """The slice rotation and the step jitter of each pixel from a 3-D unit-vector noise
+    texture (:class:`SliceNoise`): the azimuth of a texel's (x, y) and its z are independent
+    and uniform (Archimedes), u_slice = azimuth / (2 pi) and u_step = (z + 1) / 2; 1/2 for
+    both without a texture."""
     k = len(px.index)
-    if noise is None:
-        u_slice = u_step = np.full(k, 0.5)
-    else:
-        u_slice = (np.arctan2(noise[:, 1], noise[:, 0]) / (2.0 * np.pi)) % 1.0
-        u_step = np.clip(0.5 * (noise[:, 2] + 1.0), 0.0, 1.0 - 1e-12)
-    return u_slice, u_step, noise is not None
+    if texture is None:
+        return SliceNoise(u_step=np.full(k, 0.5), has_noise=False)
+    size = texture.shape[0]
+    # the texel of each pixel, as noise_at reads it
+    texel = (px.row % size) * size + px.col % size
+    noise = texture.reshape(-1, 3)
+    u_slice = (np.arctan2(noise[:, 1], noise[:, 0]) / (2.0 * np.pi)) % 1.0
+    u_step = np.clip(0.5 * (noise[:, 2] + 1.0), 0.0, 1.0 - 1e-12)
+    return SliceNoise(u_step=np.take(u_step, texel), has_noise=True, texel=texel, u_texel=u_slice)
 
 
-def horizon_slice(px: Pixels, phi, v, b1, b2, *, min_px: float) -> Slice:
-    """The slice at view-space angle ``phi`` around v (see :class:`Slice`)."""
+def horizon_slice(px: Pixels, rotation, v, b1, b2, *, min_px: float) -> Slice:
+    """The slice at view-space angle phi around v (see :class:`Slice`); ``rotation`` is
+    (cos phi, sin phi) (:meth:`SliceNoise.rotation`)."""
     vx, vy, vz = v
     n = px.n
     nx, ny, nz = n[:, 0], n[:, 1], n[:, 2]
     rx, ry = px.ray
     # Algorithm 1: the slice direction t is cos phi b1 + sin phi b2, orthogonal to v
-    cphi, sphi = np.cos(phi), np.sin(phi)
+    cphi, sphi = rotation
     tx, ty, tz = cphi * b1[0] + sphi * b2[0], cphi * b1[1] + sphi * b2[1], cphi * b1[2] + sphi * b2[2]
     # the slice's axis (normal of the plane) and the normal projected onto the plane
     ax, ay, az = ty * vz - tz * vy, tz * vx - tx * vz, tx * vy - ty * vx
@@ -638,8 +696,16 @@ def horizon_slice(px: Pixels, phi, v, b1, b2, *, min_px: float) -> Slice:
     pnx, pny, pnz = nx - na * ax, ny - na * ay, nz - na * az
     pn_len = np.sqrt(pnx * pnx + pny * pny + pnz * pnz)
     # gamma: the projected normal's angle from v, positive towards t (Sec. 4)
-    gamma = np.arctan2(pnx * tx + pny * ty + pnz * tz, pnx * vx + pny * vy + pnz * vz)
-    sin_g, cos_g = np.sin(gamma), np.cos(gamma)
+    g_t = pnx * tx + pny * ty + pnz * tz
+    g_v = pnx * vx + pny * vy + pnz * vz
+    gamma = np.arctan2(g_t, g_v)
+    # its sine and cosine from the same components (within rounding of np.sin and np.cos of
+    # gamma, at a fraction of their cost); a zero projection takes the arctangent's angle
+    g_len = np.sqrt(g_t * g_t + g_v * g_v)
+    sin_g, cos_g = np.divide(g_t, g_len, out=g_t), np.divide(g_v, g_len, out=g_v)
+    zero = g_len == 0
+    if zero.any():
+        sin_g[zero], cos_g[zero] = np.sin(gamma[zero]), np.cos(gamma[zero])
     # the slice's screen direction: the projection of p + R t to first order, in pixels (x
     # right, rows up), honouring fx and fy; the eye, p and every point of that screen line
     # lie in the slice plane
@@ -677,19 +743,33 @@ def horizon_tap(px: Pixels, sl: Slice, s, *, fetch: str, offscreen: str) -> Tap:
     de = s * sl.oy                   # rows up
     if fetch == "nearest":
         # the tap snapped to the centre of the pixel it falls in
-        dj, de = np.rint(dj), np.rint(de)
-    x, y = px.col + 0.5 + dj, px.row + 0.5 - de
+        dj, de = np.rint(dj, out=dj), np.rint(de, out=de)
+    centre = px.center
+    x, y = centre[:, 0] + dj, centre[:, 1] - de
     d = fetch_depth(px.depth, x, y, fetch=fetch, offscreen=offscreen, reciprocal=px.perspective)
     p = px.p
-    ok = np.isfinite(d) & (d > 0) & ((dj != 0) | (de != 0))
-    d = np.where(ok, d, p[:, 2])
+    ok = np.isfinite(d)
+    ok &= d > 0
+    moved = dj != 0
+    moved |= de != 0
+    ok &= moved
+    np.copyto(d, p[:, 2], where=~ok)
     # the tap's view-space position (the pixel's ray shifted to the tap), minus p
     srx, sry = shift_ray(*px.ray, dj, -de, px.fx, px.fy)
-    sx, sy = ray_to_xy(srx, sry, d, px.perspective)
-    ddx, ddy, ddz = sx - p[:, 0], sy - p[:, 1], d - p[:, 2]
-    dist = np.sqrt(ddx * ddx + ddy * ddy + ddz * ddz)
+    if px.perspective:
+        # (a Z, b Z) in new arrays: the offsets from p overwrite them
+        ddx, ddy = ray_to_xy(srx, sry, d, True)
+        ddx -= p[:, 0]
+        ddy -= p[:, 1]
+    else:
+        ddx, ddy = srx - p[:, 0], sry - p[:, 1]
+    ddz = d - p[:, 2]
+    dist = ddx * ddx
+    dist += np.multiply(ddy, ddy, out=dj)
+    dist += np.multiply(ddz, ddz, out=dj)
+    np.sqrt(dist, out=dist)
     ok &= dist > 0
-    dist = np.where(ok, dist, 1.0)
+    np.copyto(dist, 1.0, where=~ok)
     return Tap(ok=ok, d=d, delta=(ddx, ddy, ddz), dist=dist, ray=(srx, sry), x=x, y=y)
 
 

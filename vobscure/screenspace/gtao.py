@@ -322,14 +322,14 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
     horizon does not raise it."""
     k = len(px.index)
     (vx, vy, vz), b1, b2 = C.view_basis(px)
-    u_slice, u_step, has_noise = C.slice_noise(px, texture)
+    noise = C.slice_noise(px, texture)
+    u_step, has_noise = noise.u_step, noise.has_noise
     visibility = np.zeros(k)
     bent_normal = np.zeros((k, 3)) if bent else None
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # Algorithm 1: phi = pi (slice + noise) / slices (uniform around v, not the view axis)
-            phi = np.pi * (s + u_slice) / slices
-            sl = C.horizon_slice(px, phi, (vx, vy, vz), b1, b2, min_px=PIXEL_TOO_CLOSE)
+            sl = C.horizon_slice(px, noise.rotation(s, slices), (vx, vy, vz), b1, b2, min_px=PIXEL_TOO_CLOSE)
             tx, ty, tz = sl.t
             gamma, sin_g, cos_g, pn_len = sl.gamma, sl.sin_g, sl.cos_g, sl.pn_len
             # horizons start at the tangent plane: cos(gamma +- pi/2) = -+ sin(gamma)

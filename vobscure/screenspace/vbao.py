@@ -30,7 +30,7 @@ Not read here: three.js ``SSGINode`` and Filament's implementation.
 
 from __future__ import annotations
 
-from functools import partial
+from functools import lru_cache, partial
 
 import numpy as np
 
@@ -301,41 +301,62 @@ class _Weights:
         self.PQ = PQ                                                               # (S + 1, 2)
         dPQ = np.zeros((8 * nbytes, 2))
         dPQ[:sectors] = np.diff(PQ, axis=0)
-        # per byte: the (256,) sums of dP and of dQ
-        self.table = [tuple(np.ascontiguousarray(bits @ dPQ[8 * b:8 * b + 8, c]) for c in (0, 1))
-                      for b in range(nbytes)]
+        # per byte: the (256,) sums of dP and of dQ, as the real and imaginary parts of one
+        # complex table (one gather reads both; complex sums add the parts separately)
+        self.table = []
+        for b in range(nbytes):
+            table = np.empty(256, dtype=np.complex128)
+            table.real, table.imag = bits @ dPQ[8 * b:8 * b + 8, 0], bits @ dPQ[8 * b:8 * b + 8, 1]
+            self.table.append((table,))
+        # per j0 in 0 .. S + 1: the masks of the sectors below and above theta = 0, the bit of
+        # the sector across it (0 when none), and that sector's (P_{j0} + P_{j0-1}, Q_{j0} + Q_{j0-1})
+        j0 = np.arange(sectors + 2)
+        self.below = _LOW[np.maximum(j0 - 1, 0)]
+        self.above = ~_LOW[np.minimum(j0, sectors)]
+        jc = np.clip(j0 - 1, 0, sectors - 1)
+        across = (j0 >= 1) & (j0 <= sectors)
+        self.across = np.where(across, np.left_shift(np.uint64(1), jc.astype(np.uint64)), np.uint64(0))
+        jn = np.minimum(jc + 1, sectors)
+        self.across_PQ = tuple(PQ[jn, c] + PQ[jc, c] for c in (0, 1))
 
     def _sum(self, mask):
         """The table sums over the bits set in ``mask`` (k,) uint64: a list of (k,) arrays,
-        one per table column."""
+        one per table column (complex for ``"cosine"`` and ``"uniform"``: dP + i dQ)."""
+        # the mask's bytes, least significant first, gathered from without shifting
+        octets = np.asarray(mask, dtype="<u8").view(np.uint8).reshape(-1, 8)
         out = None
         for b, columns in enumerate(self.table):
-            byte = ((mask >> np.uint64(8 * b)) & np.uint64(255)).astype(np.intp)
+            byte = octets[:, b]
             parts = [np.take(c, byte) for c in columns]
-            out = parts if out is None else [o + q for o, q in zip(out, parts)]
+            if out is None:
+                out = parts
+            else:
+                for o, q in zip(out, parts):
+                    o += q
         return out
 
     def open_weight(self, occluded, sl):
         """(k,) the weighted sum of the sectors not set in ``occluded`` (k,) of slice ``sl``."""
-        open_bits = ~occluded & self.full
+        open_bits = np.invert(occluded)
+        open_bits &= self.full
         if self.weighting in ("bitcount", "eevee"):
             return self._sum(open_bits)[0]
         S = self.S
         # j0: the boundaries below theta = 0 (phi_j < -gamma), 0 .. S + 1
         j0 = np.clip(np.ceil((0.5 * np.pi - sl.gamma) * S / np.pi), 0, S + 1).astype(np.intp)
-        below = open_bits & _LOW[np.maximum(j0 - 1, 0)]
-        above = open_bits & ~_LOW[np.minimum(j0, S)]
-        (pa, qa), (pb, qb) = self._sum(above), self._sum(below)
-        # the sector across theta = 0
-        across = (j0 >= 1) & (j0 <= S)
-        jc = np.clip(j0 - 1, 0, S - 1)
-        bit = ((open_bits >> jc.astype(np.uint64)) & np.uint64(1)).astype(bool) & across
-        P, Q = self.PQ[:, 0], self.PQ[:, 1]
-        jn = np.minimum(jc + 1, S)
-        p = pa - pb + np.where(bit, np.take(P, jn) + np.take(P, jc), 0.0)
-        q = qa - qb + np.where(bit, np.take(Q, jn) + np.take(Q, jc), 0.0)
+        # (sum of dP) + i (sum of dQ) above theta = 0, less the same below
+        pq = self._sum(np.take(self.above, j0) & open_bits)[0]
+        pq -= self._sum(np.take(self.below, j0) & open_bits)[0]
+        # the sector across theta = 0, where open (a product with the bit, not a select: the
+        # terms are finite)
+        bit = (np.take(self.across, j0) & open_bits) != 0
+        p = pq.real + np.take(self.across_PQ[0], j0) * bit
+        q = pq.imag + np.take(self.across_PQ[1], j0) * bit
         R = 0.5 * sl.gamma * sl.sin_g if self.weighting == "cosine" else 0.5
-        return sl.cos_g * p + sl.sin_g * q + np.where(bit, 2.0 * R, 0.0)
+        out = sl.cos_g * p
+        out += sl.sin_g * q
+        out += (2.0 * R) * bit
+        return out
 
 
 def _layer_back(px, tap, intervals, offscreen):
@@ -353,8 +374,9 @@ ACOS_COEFFICIENTS = (1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046, 0
                      0.0066700901, -0.0012624911)
 
 
-def _acos(c):
-    """arccos of ``c`` clamped to [-1, 1] (A&S 4.4.46, :data:`ACOS_COEFFICIENTS`); overwrites ``c``.
+def _acos(c, out=None):
+    """arccos of ``c`` clamped to [-1, 1] (A&S 4.4.46, :data:`ACOS_COEFFICIENTS`), in ``out``
+    (a new array without it); overwrites ``c``.
 
     Examples
     --------
@@ -363,24 +385,26 @@ def _acos(c):
     >>> bool(np.max(np.abs(_acos(x.copy()) - np.arccos(x))) < 2.5e-8)
     True
     """
-    c = np.minimum(np.maximum(c, -1.0, out=c), 1.0, out=c)
+    c = np.clip(c, -1.0, 1.0, out=c)
     negative = c < 0
     x = np.abs(c, out=c)
-    r = np.full_like(x, ACOS_COEFFICIENTS[-1])
-    for a in ACOS_COEFFICIENTS[-2::-1]:
+    # Horner's scheme from a_7 down
+    r = np.multiply(x, ACOS_COEFFICIENTS[-1], out=out)
+    r += ACOS_COEFFICIENTS[-2]
+    for a in ACOS_COEFFICIENTS[-3::-1]:
         r *= x
         r += a
     np.subtract(1.0, x, out=x)
     r *= np.sqrt(x, out=x)
     # arccos(-x) = pi - arccos(x)
-    return np.where(negative, np.pi - r, r)
+    return np.subtract(np.pi, r, out=r, where=negative)
 
 
 def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals, offscreen):
-    """The angle from v (k,) of the tap's back point (``dv``: the tap's offset from p along v)."""
+    """The angle from v (k,) of the tap's back point (``dv``: the tap's offset from p along v),
+    for a thickness that varies per tap (``linear``) or read from the layers (``layers``);
+    :class:`_Kernel` computes the constant thicknesses in place."""
     if not layers:
-        if np.isinf(thickness):
-            return np.full(len(px.index), np.pi)
         T = thickness * tap.d if linear else thickness
         # Bevy processSample, SSRT3 HorizonSampling, Blender: the tap moved away from the
         # camera by T along p's view vector (unit): (delta - T v) . v = dv - T and
@@ -406,61 +430,144 @@ def _back_angle(px, tap, v, dv, *, thickness, linear, layers, intervals, offscre
     return np.where(length > 0, _acos(cos_b), 0.0)
 
 
+class _Kernel:
+    """VBAO's per-tap work on one chunk of pixels, with its (k,) work arrays allocated once:
+    every step runs in place on them (a chunk's taps are its whole per-pixel state)."""
+
+    def __init__(self, px, v, *, radius, thickness, linear, layers, thickness_far, sectors, touch, offscreen,
+                 intervals):
+        k = len(px.index)
+        self.px, self.v, self.radius, self.S = px, v, radius, sectors
+        self.thickness, self.linear, self.layers = thickness, linear, layers
+        self.thickness_far, self.touch, self.offscreen, self.intervals = thickness_far, touch, offscreen, intervals
+        self.dv, self.tmp, self.lo, self.hi = (np.empty(k) for _ in range(4))
+        # the cosines and the angles of the front (row 0) and back (row 1) points: one arccos
+        # evaluates both
+        self.cosines, self.alpha = np.empty((2, k)), np.empty((2, k))
+        self.alpha_f, self.alpha_b = self.alpha
+        self.index, self.mask = np.empty(k, dtype=np.intp), np.empty(k, dtype=np.uint64)
+        self.runs = _run_masks(sectors)
+
+    def angles(self, tap):
+        """The front and back angles (k,) from v of the tap's occluder, alpha_f <= alpha_b
+        (Therrien et al. 2023, Algorithm 1), in :attr:`alpha_f` and :attr:`alpha_b`."""
+        vx, vy, vz = self.v
+        ddx, ddy, ddz = tap.delta
+        dv, tmp, alpha_f, alpha_b = self.dv, self.tmp, self.alpha_f, self.alpha_b
+        # dv = delta . v (summed in x, y, z order)
+        np.multiply(ddx, vx, out=dv)
+        dv += np.multiply(ddy, vy, out=tmp)
+        dv += np.multiply(ddz, vz, out=tmp)
+        cos_f, cos_b = self.cosines
+        np.divide(dv, tap.dist, out=cos_f)
+        T = self.thickness
+        if self.layers or self.linear:
+            _acos(cos_f, out=alpha_f)
+            alpha_b[:] = _back_angle(self.px, tap, self.v, dv, thickness=T, linear=self.linear, layers=self.layers,
+                                     intervals=self.intervals, offscreen=self.offscreen)
+        elif np.isinf(T):
+            _acos(cos_f, out=alpha_f)
+            alpha_b.fill(np.pi)
+        else:
+            # Bevy processSample, SSRT3 HorizonSampling, Blender: the tap moved away from the
+            # camera by T along p's view vector (unit): (delta - T v) . v = dv - T and
+            # |delta - T v|^2 = dist^2 - 2 T dv + T^2
+            length = np.multiply(tap.dist, tap.dist, out=self.lo)
+            length -= np.multiply(dv, 2.0 * T, out=tmp)
+            length += T * T
+            np.sqrt(np.maximum(length, 1e-300, out=length), out=length)
+            np.subtract(dv, T, out=cos_b)
+            cos_b /= length
+            _acos(self.cosines.reshape(-1), out=self.alpha.reshape(-1))
+        np.maximum(alpha_b, alpha_f, out=alpha_b)
+        if self.thickness_far > 0:
+            # Blender: the back horizon at least thickness_far past the front one
+            np.maximum(alpha_b, np.add(alpha_f, self.thickness_far, out=tmp), out=alpha_b)
+
+    def mark(self, tap, sign, per_radian, origin):
+        """The bitmask (k,) uint64 of the sectors the tap's occluder marks (none where the
+        tap is not used): the angles of :meth:`angles`, signed (positive towards t), to
+        sectors, S ((theta - gamma) / pi + 1/2) = theta per_radian + origin (Algorithm 1;
+        Bevy's n, Blender's ratio)."""
+        S, lo, hi = self.S, self.lo, self.hi
+        np.multiply(self.alpha_f if sign > 0 else self.alpha_b, per_radian, out=lo)
+        np.multiply(self.alpha_b if sign > 0 else self.alpha_f, per_radian, out=hi)
+        if sign > 0:
+            lo += origin
+            hi += origin
+        else:
+            # theta = -alpha: -(alpha per_radian) + origin
+            np.subtract(origin, lo, out=lo)
+            np.subtract(origin, hi, out=hi)
+        if self.touch:
+            # Bevy updateSectors / SSRT3 ComputeOccludedBitfield: from floor(a),
+            # ceil(b - a) sectors, a and b clamped to the hemisphere
+            np.clip(lo, 0.0, S, out=lo)
+            np.clip(hi, 0.0, S, out=hi)
+            hi -= lo
+            np.ceil(hi, out=hi)
+            np.floor(lo, out=lo)
+            hi += lo
+            np.minimum(hi, S, out=hi)
+        else:
+            # the sectors whose centre i + 1/2 lies in [lo, hi]
+            lo -= 0.5
+            np.clip(np.ceil(lo, out=lo), 0.0, S, out=lo)
+            hi -= 0.5
+            np.floor(hi, out=hi)
+            hi += 1.0
+            np.maximum(np.minimum(hi, S, out=hi), lo, out=hi)
+        # Blender: a tap counts when its front point lies within the radius; a tap not
+        # counted reads the empty interval (0, 0)
+        use = tap.dist <= self.radius
+        use &= tap.ok
+        lo *= S + 1
+        lo += hi
+        lo *= use
+        np.copyto(self.index, lo, casting="unsafe")
+        return np.take(self.runs, self.index, out=self.mask)
+
+
+@lru_cache(maxsize=None)
+def _run_masks(sectors: int) -> np.ndarray:
+    """((sectors + 1)^2,) uint64: entry i0 (sectors + 1) + i1 the bitmask of the sectors
+    i0 .. i1 - 1 (empty for i1 <= i0)."""
+    i0, i1 = np.divmod(np.arange((sectors + 1) ** 2), sectors + 1)
+    masks = _LOW[np.maximum(i1, i0)] ^ _LOW[i0]
+    masks.flags.writeable = False
+    return masks
+
+
 def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickness_far, weighting, sectors,
                  touch, step_power, fetch, offscreen, texture, intervals, r1_jitter=False):
     """VBAO of one chunk of pixels (see :func:`vbao`): loops over slices and steps only."""
     k = len(px.index)
     v, b1, b2 = C.view_basis(px)
-    vx, vy, vz = v
-    u_slice, u_step, has_noise = C.slice_noise(px, texture)
+    noise = C.slice_noise(px, texture)
+    u_step, has_noise = noise.u_step, noise.has_noise
     S = sectors
     weights = _Weights(S, weighting)
+    work = _Kernel(px, v, radius=radius, thickness=thickness, linear=linear, layers=layers,
+                   thickness_far=thickness_far, sectors=S, touch=touch, offscreen=offscreen, intervals=intervals)
     visibility = np.zeros(k)
     weight_sum = np.zeros(k)
+    # theta -> sectors: S ((theta - gamma) / pi + 1/2) = theta per_radian + origin
+    per_radian = S / np.pi
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # the slices of GTAO (Jimenez et al. 2016, Algorithm 1)
-            phi = np.pi * (s + u_slice) / slices
-            sl = C.horizon_slice(px, phi, v, b1, b2, min_px=PIXEL_TOO_CLOSE)
+            sl = C.horizon_slice(px, noise.rotation(s, slices), v, b1, b2, min_px=PIXEL_TOO_CLOSE)
             occluded = np.zeros(k, dtype=np.uint64)
-            # theta -> sectors: S ((theta - gamma) / pi + 1/2) = theta per_radian + origin
-            per_radian = S / np.pi
             origin = S * (0.5 - sl.gamma / np.pi)
             for j in range(steps):
                 u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and has_noise) else u_step
                 t = ((j + u) / steps) ** step_power + sl.min_s
                 for sign in (1.0, -1.0):
-                    tap = C.horizon_tap(px, sl, sign * t, fetch=fetch, offscreen=offscreen)
-                    ddx, ddy, ddz = tap.delta
-                    # Blender: a tap counts when its front point lies within the radius
-                    use = tap.ok & (tap.dist <= radius)
-                    # Therrien et al. 2023, Algorithm 1: the front and back horizon angles from v
-                    dv = ddx * vx + ddy * vy + ddz * vz
-                    alpha_f = _acos(dv / tap.dist)
-                    alpha_b = _back_angle(px, tap, v, dv, thickness=thickness, linear=linear, layers=layers,
-                                          intervals=intervals, offscreen=offscreen)
-                    np.maximum(alpha_b, alpha_f, out=alpha_b)
-                    if thickness_far > 0:
-                        # Blender: the back horizon at least thickness_far past the front one
-                        np.maximum(alpha_b, alpha_f + thickness_far, out=alpha_b)
-                    # the signed angles theta (positive towards t) of the interval's ends, lo <= hi,
-                    # in sectors: S ((theta - gamma) / pi + 1/2) (Algorithm 1; Bevy's n, Blender's ratio)
-                    lo, hi = (alpha_f, alpha_b) if sign > 0 else (-alpha_b, -alpha_f)
-                    lo = lo * per_radian + origin
-                    hi = hi * per_radian + origin
-                    if touch:
-                        # Bevy updateSectors / SSRT3 ComputeOccludedBitfield: from floor(a),
-                        # ceil(b - a) sectors, a and b clamped to the hemisphere
-                        lo = np.minimum(np.maximum(lo, 0.0), S)
-                        hi = np.minimum(np.maximum(hi, 0.0), S)
-                        i0 = np.floor(lo)
-                        i1 = np.minimum(i0 + np.ceil(hi - lo), S)
-                    else:
-                        # the sectors whose centre i + 1/2 lies in [lo, hi]
-                        i0 = np.minimum(np.maximum(np.ceil(lo - 0.5), 0.0), S)
-                        i1 = np.maximum(np.minimum(np.floor(hi - 0.5) + 1.0, S), i0)
-                    i1 = np.where(use, i1, i0)
-                    occluded |= np.take(_LOW, i1.astype(np.intp)) ^ np.take(_LOW, i0.astype(np.intp))
+                    tap = C.horizon_tap(px, sl, t if sign > 0 else -t, fetch=fetch, offscreen=offscreen)
+                    # Therrien et al. 2023, Algorithm 1: the front and back horizon angles
+                    # from v, then the sectors between them
+                    work.angles(tap)
+                    occluded |= work.mark(tap, sign, per_radian, origin)
             # the unmarked sectors, weighted
             slice_vis = weights.open_weight(occluded, sl)
             if weighting in ("cosine", "eevee"):
