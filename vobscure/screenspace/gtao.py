@@ -19,6 +19,7 @@ from functools import partial
 import numpy as np
 
 from . import _common as C
+from . import _horizon as Hz
 
 __all__ = ["gtao", "gtao_bent_normals", "PRESETS"]
 
@@ -321,15 +322,15 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
     ``intervals`` (``thickness="layers"``) a tap whose occluder's back lies above the current
     horizon does not raise it."""
     k = len(px.index)
-    (vx, vy, vz), b1, b2 = C.view_basis(px)
-    noise = C.slice_noise(px, texture)
+    (vx, vy, vz), b1, b2 = Hz.view_basis(px)
+    noise = Hz.slice_noise(px, texture)
     u_step, has_noise = noise.u_step, noise.has_noise
     visibility = np.zeros(k)
     bent_normal = np.zeros((k, 3)) if bent else None
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # Algorithm 1: phi = pi (slice + noise) / slices (uniform around v, not the view axis)
-            sl = C.horizon_slice(px, noise.rotation(s, slices), (vx, vy, vz), b1, b2, min_px=PIXEL_TOO_CLOSE)
+            sl = Hz.horizon_slice(px, noise.rotation(s, slices), (vx, vy, vz), b1, b2, min_px=PIXEL_TOO_CLOSE)
             tx, ty, tz = sl.t
             gamma, sin_g, cos_g, pn_len = sl.gamma, sl.sin_g, sl.cos_g, sl.pn_len
             # horizons start at the tangent plane: cos(gamma +- pi/2) = -+ sin(gamma)
@@ -343,7 +344,7 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
                 u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and has_noise) else u_step
                 t = ((j + u) / steps) ** SAMPLE_DISTRIBUTION_POWER + sl.min_s
                 for side, sign in ((0, 1.0), (1, -1.0)):
-                    tap = C.horizon_tap(px, sl, sign * t, fetch=fetch, offscreen=offscreen)
+                    tap = Hz.horizon_tap(px, sl, sign * t, fetch=fetch, offscreen=offscreen)
                     ok, dist = tap.ok, tap.dist
                     ddx, ddy, ddz = tap.delta
                     # Sec. 4: the horizon is the largest cos of the angle to v

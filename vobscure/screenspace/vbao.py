@@ -36,6 +36,7 @@ import numpy as np
 
 from .._validate import check_choice, check_positive
 from . import _common as C
+from . import _horizon as Hz
 from .gtao import PIXEL_TOO_CLOSE, R1_STEP, SAMPLE_DISTRIBUTION_POWER, STEP_JITTERS
 
 __all__ = ["vbao", "sector_weights", "WEIGHTINGS", "THICKNESS_SCALES", "SECTOR_RULES", "EEVEE_WEIGHTS"]
@@ -542,8 +543,8 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
                  touch, step_power, fetch, offscreen, texture, intervals, r1_jitter=False):
     """VBAO of one chunk of pixels (see :func:`vbao`): loops over slices and steps only."""
     k = len(px.index)
-    v, b1, b2 = C.view_basis(px)
-    noise = C.slice_noise(px, texture)
+    v, b1, b2 = Hz.view_basis(px)
+    noise = Hz.slice_noise(px, texture)
     u_step, has_noise = noise.u_step, noise.has_noise
     S = sectors
     weights = _Weights(S, weighting)
@@ -556,14 +557,14 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for s in range(slices):
             # the slices of GTAO (Jimenez et al. 2016, Algorithm 1)
-            sl = C.horizon_slice(px, noise.rotation(s, slices), v, b1, b2, min_px=PIXEL_TOO_CLOSE)
+            sl = Hz.horizon_slice(px, noise.rotation(s, slices), v, b1, b2, min_px=PIXEL_TOO_CLOSE)
             occluded = np.zeros(k, dtype=np.uint64)
             origin = S * (0.5 - sl.gamma / np.pi)
             for j in range(steps):
                 u = (u_step + (s + j * steps) * R1_STEP) % 1.0 if (r1_jitter and has_noise) else u_step
                 t = ((j + u) / steps) ** step_power + sl.min_s
                 for sign in (1.0, -1.0):
-                    tap = C.horizon_tap(px, sl, t if sign > 0 else -t, fetch=fetch, offscreen=offscreen)
+                    tap = Hz.horizon_tap(px, sl, t if sign > 0 else -t, fetch=fetch, offscreen=offscreen)
                     # Therrien et al. 2023, Algorithm 1: the front and back horizon angles
                     # from v, then the sectors between them
                     work.angles(tap)
