@@ -120,3 +120,10 @@ def test_hits_match_images_and_lazy_fields_are_read_only():
     g32 = gb.astype(np.float32)
     assert g32.world_position.dtype == np.float32 and g32.normal.dtype == np.float32
     np.testing.assert_allclose(g32.depth[gb.valid], gb.depth[gb.valid], rtol=1e-6)
+
+
+def test_has_hit_data_tells_rendered_from_derived():
+    cam = vo.Camera.look_at((0, 3, 0), (0, 0, 0), up=(0, 0, -1), size=(4, 4), ortho_height=2.0)
+    gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+    assert gb.has_hit_data and gb.astype(np.float32).has_hit_data
+    assert not vo.GBuffer.from_arrays(gb.depth, camera=cam).has_hit_data

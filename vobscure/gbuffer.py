@@ -178,6 +178,13 @@ class GBuffer:
         """(H, W)."""
         return self.depth.shape
 
+    @property
+    def has_hit_data(self) -> bool:
+        """True when the per-hit data (:attr:`hits`) were given (a render, or the caller), False
+        when they are derived from ``depth`` and ``normal`` (:meth:`from_arrays`): then the
+        world positions carry the depth's precision, not the renderer's."""
+        return self._hit_source is not None
+
     @cached_property
     def hits(self) -> dict:
         """Per-hit world-space data, pixels in row-major order (the order of a boolean mask):

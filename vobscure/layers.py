@@ -255,21 +255,22 @@ class PeeledLayers:
             own += self._first[0].nbytes + self._first[1].nbytes
         return int(own + (0 if self._open is None else self._open.nbytes))
 
+    def _stacked(self, first, rest, dtype) -> np.ndarray:
+        """(K, H, W): layer 0's image ``first`` above the stored layers ``rest``."""
+        out = np.empty(self.entering.shape, dtype=dtype)
+        out[0] = first
+        out[1:] = rest
+        return _frozen(out)
+
     @property
     def depth(self) -> np.ndarray:
         """(K, H, W) float32 view depths, layer 0 rounded from its own image; made on access."""
-        out = np.empty(self.entering.shape, dtype=np.float32)
-        out[0] = self._first[0]
-        out[1:] = self._depth
-        return _frozen(out)
+        return self._stacked(self._first[0], self._depth, np.float32)
 
     @property
     def primitive(self) -> np.ndarray:
         """(K, H, W) int32 triangles, -1 where there is no surface; made on access."""
-        out = np.empty(self.entering.shape, dtype=np.int32)
-        out[0] = self._first[1]
-        out[1:] = self._primitive
-        return _frozen(out)
+        return self._stacked(self._first[1], self._primitive, np.int32)
 
     @property
     def open_surface(self) -> np.ndarray:

@@ -194,7 +194,7 @@ def plane_labels(gbuffer) -> np.ndarray | None:
     neighbour. A plane whose key falls on a quantum's edge may get two labels, which only
     makes :func:`on_one_plane` more cautious.
     """
-    if getattr(gbuffer, "_hit_source", None) is None:
+    if not getattr(gbuffer, "has_hit_data", False):
         return None
     hits = gbuffer.hits
     if not {"index", "world_geometric_normal", "world_normal", "world_position"} <= set(hits):
