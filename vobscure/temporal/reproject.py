@@ -1,0 +1,261 @@
+"""Reprojection of a history image from the previous frame into the current one.
+
+Each covered pixel of the current frame looks up where its surface point was in the previous
+frame: from the two views and its depth (the point's world position seen by the previous
+view), or from a renderer's motion vectors (:attr:`vobscure.GBuffer.motion`). The history is
+read there (bilinearly, or at the nearest pixel), tap by tap, and a tap counts only when the
+previous frame saw the *same* surface there: its point lies within ``depth_tolerance`` x depth
+of the current point's tangent plane. A pixel whose taps all fail is *disoccluded* (revealed in
+this frame, or coming from outside the previous image): it has no history.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_choice, check_positive
+from ..gbuffer import GBuffer
+
+__all__ = ["DEPTH_TOLERANCE", "REPROJECT_FETCHES", "Reprojection", "previous_pixels", "reproject"]
+
+#: Default tolerance of the same-surface test, as a fraction of the depth: a previous-frame tap
+#: counts when its surface point lies within 1 % of the depth of the current point's tangent plane.
+DEPTH_TOLERANCE = 0.01
+#: How the history is read at the reprojected position.
+REPROJECT_FETCHES = ("bilinear", "nearest")
+
+
+@dataclass(frozen=True)
+class Reprojection:
+    """The history of the previous frame seen from the current one (all (H, W) of the current
+    frame).
+
+    Attributes
+    ----------
+    value : (H, W) float
+        The reprojected history; NaN where there is none.
+    count : (H, W) int32
+        The number of frames accumulated in that history (the smallest of the taps used); 0
+        where there is none.
+    found : (H, W) bool
+        True where at least one tap passed the same-surface test.
+    source : (H, W, 2) float64
+        The continuous previous-frame pixel position (x, y) of each covered pixel; NaN on
+        background and where the point is behind the previous camera.
+    covered : (H, W) bool
+        The current frame's covered pixels.
+    """
+
+    value: np.ndarray
+    count: np.ndarray
+    found: np.ndarray
+    source: np.ndarray
+    covered: np.ndarray
+
+    @property
+    def disoccluded(self) -> np.ndarray:
+        """(H, W) bool: covered pixels of the current frame without history (revealed in this
+        frame, or seen from outside the previous image)."""
+        return self.covered & ~self.found
+
+
+def _as_gbuffer(value, name: str) -> GBuffer:
+    if not isinstance(value, GBuffer):
+        raise ValueError(f"{name} must be a vobscure.GBuffer, got {type(value).__name__}")
+    return value.inner()
+
+
+def previous_pixels(current, previous) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the covered pixels of ``current`` were seen in ``previous``, from the two views.
+
+    Parameters
+    ----------
+    current, previous : GBuffer
+        The two frames (their inner frames when they have a guard band); both views need a
+        world frame (a camera with a pose, or ``view=`` given to ``from_arrays``).
+
+    Returns
+    -------
+    pixels : (H, W, 2) float64
+        Continuous (x, y) in the previous image; NaN on background and behind its camera.
+    points : (H, W, 3) float64
+        The current surface points in the previous view space; NaN on background.
+    normals : (H, W, 3) float64
+        The current shading normals in the previous view space; 0 on background.
+    """
+    current = _as_gbuffer(current, "current")
+    previous = _as_gbuffer(previous, "previous")
+    Rc, tc = current.view_transform
+    Rp, tp = previous.view_transform
+    # current view -> world -> previous view: p_prev = Rp Rc^T (p_cur - tc) + tp
+    M = Rp @ Rc.T
+    t = tp - M @ tc
+    pos = np.asarray(current.position, dtype=np.float64)
+    points = pos @ M.T + t
+    normals = np.asarray(current.normal, dtype=np.float64) @ M.T
+    pixels, _ = previous.camera.project(points)
+    return pixels, points, normals
+
+
+def _same_view(current: GBuffer, previous: GBuffer) -> bool:
+    """Whether the two frames share camera and world frame (a static camera)."""
+    if current.camera != previous.camera or current.shape != previous.shape:
+        return False
+    try:
+        Rc, tc = current.view_transform
+        Rp, tp = previous.view_transform
+    except ValueError:
+        return False
+    return bool(np.array_equal(Rc, Rp) and np.array_equal(tc, tp))
+
+
+def _in_place(hist, cnt, current: GBuffer, previous: GBuffer, tol: float) -> Reprojection:
+    """The reprojection between two frames of one view: every pixel reads its own history
+    where it sees the same depth (within ``tol`` x depth) as before."""
+    z = np.asarray(current.depth, dtype=np.float64)
+    zp = np.asarray(previous.depth, dtype=np.float64)
+    valid = current.valid
+    with np.errstate(invalid="ignore"):
+        found = valid & previous.valid & np.isfinite(hist) & (np.abs(zp - z) <= tol * z)
+    H, W = current.shape
+    jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    source = np.where(valid[..., None], np.stack([jj, ii], axis=-1), np.nan)
+    return Reprojection(value=np.where(found, hist, np.nan), count=np.where(found, cnt, 0).astype(np.int32),
+                        found=found, source=source, covered=np.array(valid))
+
+
+def _taps(pixels: np.ndarray, shape: tuple, fetch: str):
+    """The previous-frame pixels (rows, cols) read at ``pixels`` and their weights: a list of
+    (i, j, w, inside) per tap."""
+    H, W = shape
+    x = pixels[..., 0] - 0.5
+    y = pixels[..., 1] - 0.5
+    if fetch == "nearest":
+        with np.errstate(invalid="ignore"):
+            j = np.rint(x)
+            i = np.rint(y)
+        corners = [(i, j, np.ones_like(x))]
+    else:
+        with np.errstate(invalid="ignore"):
+            j0 = np.floor(x)
+            i0 = np.floor(y)
+        fx, fy = x - j0, y - i0
+        corners = [(i0, j0, (1 - fx) * (1 - fy)), (i0, j0 + 1, fx * (1 - fy)),
+                   (i0 + 1, j0, (1 - fx) * fy), (i0 + 1, j0 + 1, fx * fy)]
+    out = []
+    for i, j, w in corners:
+        with np.errstate(invalid="ignore"):
+            inside = (i >= 0) & (i < H) & (j >= 0) & (j < W)
+        ii = np.where(inside, i, 0).astype(np.intp)
+        jj = np.where(inside, j, 0).astype(np.intp)
+        out.append((ii, jj, w, inside))
+    return out
+
+
+def reproject(history, current, previous, *, count=None, fetch: str = "bilinear",
+              depth_tolerance: float = DEPTH_TOLERANCE, motion=None) -> Reprojection:
+    r"""The previous frame's ``history`` image as seen from the current frame.
+
+    Parameters
+    ----------
+    history : (H', W') array_like of float
+        An image of the previous frame (the accumulated visibility); NaN where undefined.
+    current, previous : GBuffer
+        The current and the previous frame (their inner frames when they have a guard band);
+        ``history`` has the previous frame's shape.
+    count : (H', W') array_like of int, optional
+        The frames accumulated in ``history`` per pixel, reprojected alongside (the smallest
+        of the taps used); default 1 where ``history`` is finite.
+    fetch : {"bilinear", "nearest"}
+        ``bilinear``: the four pixels around the reprojected position, weighted bilinearly
+        over the taps that pass the test (renormalized); ``nearest``: the nearest pixel.
+    depth_tolerance : float
+        The same-surface test (> 0): a tap q passes when its previous-frame surface point
+        :math:`X_q` lies within ``depth_tolerance`` x z of the current point's tangent plane,
+        :math:`|n \cdot (X_q - X)| \le \tau z` (both in the previous view space; z the
+        current point's depth there). A plane test rather than a depth test, so that taps
+        along a surface seen at a grazing angle pass.
+    motion : (H, W, 2) array_like, optional
+        Motion vectors of the current frame in pixels towards the previous one (see
+        :attr:`vobscure.GBuffer.motion`); default ``current.motion``, and when that is None too,
+        the motion of the views. With motion vectors the test is on depth alone:
+        :math:`|z_q - z| \le \tau z` with z the current depth.
+
+    Returns
+    -------
+    Reprojection
+
+    Examples
+    --------
+    A static camera: every covered pixel finds its own history.
+
+    >>> import numpy as np, vobscure as vo
+    >>> gb = vo.render_gbuffer(vo.scenes.cornell_box(), vo.scenes.cornell_box().camera(size=(16, 16)))
+    >>> h = np.where(gb.valid, 0.25, np.nan)
+    >>> r = vo.temporal.reproject(h, gb, gb)
+    >>> bool(r.found[gb.valid].all()), float(np.nanmax(np.abs(r.value - h)))
+    (True, 0.0)
+    """
+    current = _as_gbuffer(current, "current")
+    previous = _as_gbuffer(previous, "previous")
+    check_choice(fetch, "fetch", REPROJECT_FETCHES)
+    tol = check_positive(depth_tolerance, "depth_tolerance")
+    hist = np.asarray(history, dtype=np.float64)
+    if hist.shape != previous.shape:
+        raise ValueError(f"history must have the previous frame's shape {previous.shape}, got {hist.shape}")
+    if count is None:
+        cnt = np.isfinite(hist).astype(np.int32)
+    else:
+        cnt = np.asarray(count)
+        if cnt.shape != previous.shape:
+            raise ValueError(f"count must have the previous frame's shape {previous.shape}, got {cnt.shape}")
+        cnt = cnt.astype(np.int32)
+    if motion is None:
+        motion = current.motion
+    valid = current.valid
+    zp_img = np.asarray(previous.depth, dtype=np.float64)
+    if motion is None and _same_view(current, previous):
+        return _in_place(hist, cnt, current, previous, tol)
+    if motion is not None:
+        m = np.asarray(motion, dtype=np.float64)
+        if m.shape != current.shape + (2,):
+            raise ValueError(f"motion must have shape {current.shape + (2,)}, got {m.shape}")
+        H, W = current.shape
+        jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+        pixels = np.stack([jj + m[..., 0], ii + m[..., 1]], axis=-1)
+        pixels[~valid] = np.nan
+        z = np.where(valid, np.asarray(current.depth, dtype=np.float64), np.nan)
+
+        def passes(i, j):
+            return np.abs(zp_img[i, j] - z) <= tol * z
+    else:
+        pixels, points, normals = previous_pixels(current, previous)
+        z = points[..., 2]
+        # the tangent plane's offset n . X, and each tap's point along its pixel ray
+        offset = np.einsum("...k,...k->...", normals, points)
+        cam = previous.camera
+
+        def passes(i, j):
+            centres = np.stack([j + 0.5, i + 0.5], axis=-1).astype(np.float64)
+            X_q = cam.unproject(centres, zp_img[i, j])
+            with np.errstate(invalid="ignore"):
+                return np.abs(np.einsum("...k,...k->...", normals, X_q) - offset) <= tol * np.abs(z)
+
+    value_sum = np.zeros(current.shape)
+    weight = np.zeros(current.shape)
+    low = np.full(current.shape, np.iinfo(np.int32).max, dtype=np.int64)
+    for i, j, w, inside in _taps(pixels, previous.shape, fetch):
+        with np.errstate(invalid="ignore"):
+            ok = inside & valid & np.isfinite(hist[i, j]) & previous.valid[i, j] & passes(i, j)
+            ok &= w > 0
+        value_sum += np.where(ok, w * np.where(ok, hist[i, j], 0.0), 0.0)
+        weight += np.where(ok, w, 0.0)
+        low = np.where(ok, np.minimum(low, cnt[i, j]), low)
+    found = weight > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        value = np.where(found, value_sum / np.where(found, weight, 1.0), np.nan)
+    count_out = np.where(found, low, 0).astype(np.int32)
+    source = np.where(valid[..., None], pixels, np.nan)
+    return Reprojection(value=value, count=count_out, found=found, source=source, covered=np.array(valid))
