@@ -189,6 +189,21 @@ class Accumulator:
         self.seconds = 0.0
         self.frames = 0
 
+    def set_history(self, history, count, gbuffer) -> None:
+        """Start from a given history: the accumulated image ``history`` (H, W) of ``gbuffer``'s
+        frame and its frame counts ``count`` (H, W) (e.g. to resume a sequence, or to time one
+        update from a known state)."""
+        if not isinstance(gbuffer, GBuffer):
+            raise ValueError(f"gbuffer must be a vobscure.GBuffer, got {type(gbuffer).__name__}")
+        gb = gbuffer.inner()
+        h = np.array(history, dtype=np.float64)
+        n = np.array(count)
+        if h.shape != gb.shape or n.shape != gb.shape:
+            raise ValueError(f"history and count must have the G-buffer's shape {gb.shape}, got {h.shape} and {n.shape}")
+        if not np.issubdtype(n.dtype, np.integer) or (n < 0).any():
+            raise ValueError("count must hold integers >= 0")
+        self.history, self.count, self._previous = h, n.astype(np.int32), gb
+
     def _blur(self, image, gbuffer):
         from ..screenspace.blur import bilateral_blur
 
