@@ -40,8 +40,10 @@ References
    sequence, alpha = (1 / g, 1 / g^2), g the plastic number's generalization (g^3 = g + 1).
 .. [4] J. Jimenez, "Next Generation Post Processing in Call of Duty: Advanced Warfare",
    SIGGRAPH 2014 course "Advances in Real-Time Rendering": interleaved gradient noise.
-.. [5] Unity Technologies, High Definition Render Pipeline, ``AmbientOcclusion.cs`` and
-   ``GTAOCommon.hlsl`` (public source of the Unity Graphics repository).
+.. [5] Unity Technologies, High Definition Render Pipeline: the ``AmbientOcclusion`` volume
+   component's C# (the temporal tables and their indices) and the GTAO HLSL's ``GetOffset``
+   and ``GetDirection`` (read in copies of the public source; repository version not
+   identified).
 """
 
 from __future__ import annotations
@@ -320,7 +322,9 @@ def schedule_texture(schedule: str, frame: int, *, seed=0, noise_size: int = NOI
     ``"white"``: normal draws normalized (frame 0 draws from ``as_rng(seed)``, the
     single-frame texture bit for bit; frame n > 0 of an int seed from
     ``numpy.random.default_rng([seed, n])``; a Generator is drawn from as given, the caller
-    advancing it from frame to frame; None: fresh entropy). ``"rotate"``: frame 0's white
+    advancing it from frame to frame; None: fresh entropy). NumPy's ``SeedSequence`` reads
+    ``[seed, 0]`` as ``seed`` (trailing zero words add no entropy), so frame 0 follows the same
+    rule; the int seed s + n 2^32 coincides with frame n of seed s. ``"rotate"``: frame 0's white
     texture turned about the z axis by 2 pi frac(n GOLDEN) (the step jitter z unchanged).
     ``"r2"``, ``"gtao"``: :func:`uniforms_to_texture` of :func:`schedule_uniforms` (64 x 64).
     Arguments as for :func:`schedule_uniforms`; ``dim`` 2 or 3.
