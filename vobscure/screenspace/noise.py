@@ -48,11 +48,9 @@ References
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 
-from .._validate import as_rng, check_choice
+from .._validate import as_rng, check_choice, check_int
 
 __all__ = ["SCHEDULES", "NOISE_SIZE", "GOLDEN", "GTAO_ROTATIONS", "GTAO_OFFSETS", "R2_TILE", "GTAO_TILE",
            "period", "check_frame", "check_schedule", "hilbert_index", "gtao_temporal",
@@ -89,16 +87,12 @@ _Z_MIN = np.nextafter(-1.0, 0.0)
 def check_schedule(schedule) -> str:
     """``schedule`` if it is one of :data:`SCHEDULES`, else a ValueError naming the argument
     and listing the valid names."""
-    if not isinstance(schedule, str):
-        raise ValueError(f"schedule must be one of {', '.join(map(repr, SCHEDULES))}; got {schedule!r}")
     return check_choice(schedule, "schedule", SCHEDULES)
 
 
 def check_frame(frame) -> int:
     """``frame`` as an int if it is an integer >= 0 (not a bool), else a ValueError naming it."""
-    if isinstance(frame, bool) or not isinstance(frame, numbers.Integral) or frame < 0:
-        raise ValueError(f"frame must be an integer >= 0, got {frame!r}")
-    return int(frame)
+    return check_int(frame, "frame", minimum=0)
 
 
 def period(schedule: str) -> int | None:
@@ -238,8 +232,7 @@ def _gtao_uniforms(frame: int) -> np.ndarray:
 def _validate(schedule, frame, noise_size) -> tuple[str, int]:
     schedule = check_schedule(schedule)
     frame = check_frame(frame)
-    if isinstance(noise_size, bool) or not isinstance(noise_size, numbers.Integral) or noise_size < 1:
-        raise ValueError(f"noise_size must be an integer >= 1, got {noise_size!r}")
+    check_int(noise_size, "noise_size")
     return schedule, frame
 
 
