@@ -280,7 +280,7 @@ class Method:
         >>> get("line").run(gb, radius=0.5, thicknes=0.1)
         Traceback (most recent call last):
         ...
-        ValueError: no registered method takes the option(s) 'thicknes'; method 'line' takes falloff, fetch, noise_size, normal_clamp, offscreen, radius, randomize, samples, seed, thickness
+        ValueError: no registered method takes the option(s) 'thicknes'; method 'line' takes falloff, fetch, frame, noise_size, normal_clamp, offscreen, radius, randomize, samples, schedule, seed, thickness
         """
         out = crop_guard(self._call(gbuffer, samples, fetch, options), gbuffer)
         value = out.value if isinstance(out, Estimate) else out

@@ -7,7 +7,7 @@
 - :func:`disk_pixels` / :func:`nearest_taps`: disk offsets to pixels (and the nearest taps).
 - :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
 - :func:`noise_texture` / :func:`noise_at`: the small tiled random texture that randomizes
-  patterns per pixel.
+  patterns per pixel, frame by frame (the schedules: :mod:`vobscure.screenspace.noise`).
 - :func:`warper`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
 - :func:`tangent_plane_line`: the tangent plane's line coordinate (Loos & Sloan 2010, Sec. 4.4).
 - :func:`solid_intervals` / :func:`nearest_pixel` / :func:`inside_intervals` /
@@ -41,17 +41,16 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from .._validate import as_rng, check_choice, check_int, check_positive
+from .._validate import check_choice, check_int, check_positive
 from ..camera.kernel import ray_to_xy, ray_xy
 from ..estimate import Estimate
 from ..gbuffer import GBuffer
 from ..patterns import SamplePattern, ball, disk
+from .noise import NOISE_SIZE, check_frame, check_schedule, schedule_texture
 
 FETCHES = ("nearest", "bilinear")
 OFFSCREEN = ("clamp", "open")
 FALLOFFS = ("constant", "quadratic")
-#: Default edge of the tiled random texture (pixels).
-NOISE_SIZE = 4
 
 
 @dataclass
@@ -277,12 +276,17 @@ def check_common(*, fetch="nearest", offscreen="clamp", falloff="constant", thic
     return thickness
 
 
-def noise_texture(noise_size: int, seed, dim: int, randomize: bool) -> np.ndarray | None:
-    """The (noise_size, noise_size, dim) tile of random unit vectors, or None (no randomization)."""
+def noise_texture(noise_size: int, seed, dim: int, randomize: bool, *, frame: int = 0,
+                  schedule: str = "white") -> np.ndarray | None:
+    """The tile of unit vectors (T, T, dim) of frame ``frame`` of a noise schedule
+    (:func:`vobscure.screenspace.noise.schedule_texture`; T = noise_size for ``"white"`` and
+    ``"rotate"``, 64 for ``"r2"`` and ``"gtao"``), or None without randomization. ``frame``
+    and ``schedule`` are checked either way; frame 0 of ``"white"`` is the single-frame
+    texture: ``as_rng(seed).normal(size=(T, T, dim))`` normalized."""
+    schedule, frame = check_schedule(schedule), check_frame(frame)
     if not randomize:
         return None
-    v = as_rng(seed).normal(size=(noise_size, noise_size, dim))
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return schedule_texture(schedule, frame, seed=seed, noise_size=noise_size, dim=dim)
 
 
 def noise_at(px: Pixels, texture: np.ndarray | None) -> np.ndarray | None:

@@ -303,7 +303,8 @@ def region_areas(pattern: SamplePattern) -> np.ndarray:
 def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", model: str = "box", fetch: str = "bspline",
             prefilter: bool = False, lod_bias=None, randomize: bool = True, seed=0,
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, reconstruction=None) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, reconstruction=None, frame: int = 0,
+            schedule: str = "white") -> np.ndarray:
     """Volumetric Obscurance by area sampling (Loos & Sloan 2010, Sec. 4.2).
 
     Each disk sample (x, y) of the pattern stands for its Voronoi region of the unit disk,
@@ -373,6 +374,9 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     noise_size : int, optional
         Edge of the tiled random texture in pixels, as for :func:`vobscure.vo_point`
         (default 4). Unused without ``randomize``.
+    frame, schedule : int, str, optional
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
     reconstruction : {"bspline", "trilinear"}, optional
         Deprecated name of ``fetch`` (a DeprecationWarning); given, it replaces ``fetch``.
 
@@ -479,6 +483,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     reconstruction = check_choice(fetch, "fetch", RECONSTRUCTIONS)
     lod_bias = LOD_BIAS[reconstruction] if lod_bias is None else float(as_array(lod_bias, "lod_bias", shape=()))
     thickness = C.check_common(offscreen=offscreen, falloff=falloff, thickness=thickness, noise_size=noise_size)
+    texture = C.noise_texture(noise_size, seed, 2, randomize, frame=frame, schedule=schedule)
     dtype = C.out_dtype(gbuffer)
     H, W = gb.depth.shape
     if len(index) == 0:
@@ -491,7 +496,6 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
                                   prefilter=bool(prefilter), positions=normal_clamp)
     # Step 2 (per sample): the regions' log2 areas are constants (Sec. 4.2)
     half_log_area = 0.5 * np.log2(region_areas(pattern))
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
     kernel = partial(_area_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
                      thickness=thickness, falloff=falloff, model=model, reconstruction=reconstruction,
                      lod_bias=lod_bias, offscreen=offscreen, pyramid=pyramid, half_log_area=half_log_area,

@@ -48,7 +48,8 @@ def _inner_integral(h, gamma, sin_g, cos_g):
 def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_range: float = 0.0,
          thin_occluder: float = 0.0, thickness=None, power: float = 1.0, normal_fudge: float = 0.0,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
+         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
+         schedule: str = "white") -> np.ndarray:
     """Cosine-weighted ambient occlusion within ``radius`` by horizon search (GTAO).
 
     For each pixel (view-space point p, normal n, view vector v from p to the camera),
@@ -123,6 +124,10 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
         that a pixel's slices sample different radii. Both unbiased; without a denoiser
         ``"r1"`` measured slightly worse per frame (docs/screenspace.md, "GTAO"). Unused with
         ``randomize=False``.
+    frame, schedule : int, str, optional
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; ``"r2"`` is XeGTAO's own noise (u1 the slice rotation, u2
+        the step jitter). Unused without ``randomize``.
 
     Returns
     -------
@@ -216,7 +221,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     options["intervals"] = _layers(gbuffer, thickness)
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     kernel = partial(_gtao_kernel, radius=radius, texture=texture, **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
@@ -226,7 +231,8 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
                       falloff_range: float = 0.0, thin_occluder: float = 0.0, thickness=None,
                       normal_fudge: float = 0.0,
                       randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-                      noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
+                      noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
+                      schedule: str = "white") -> np.ndarray:
     """View-space bent normals from the GTAO horizons (Jimenez et al. 2016).
 
     The same horizon search as :func:`gtao` (same arguments and defaults, same seed -> same
@@ -237,7 +243,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
     Parameters
     ----------
-    gbuffer, radius, slices, steps, falloff_range, thin_occluder, thickness, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
+    gbuffer, radius, slices, steps, falloff_range, thin_occluder, thickness, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter, frame, schedule
         As in :func:`gtao` (``power`` does not apply to a direction).
 
     Returns
@@ -267,7 +273,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
                      power=1.0, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
                      offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
     options["intervals"] = _layers(gbuffer, thickness)
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     gb, depth64, index = C.frame(gbuffer, radius)
     H, W = gb.depth.shape
     out = np.full((H * W, 3), np.nan, dtype=C.out_dtype(gbuffer))

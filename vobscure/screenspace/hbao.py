@@ -27,7 +27,7 @@ def hbao_taps(directions: int, steps: int) -> int:
 @C.inner_frame
 def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_bias: float = np.pi / 18,
          attenuation: bool = True, randomize: bool = True, seed=0, offscreen: str = "clamp",
-         noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+         noise_size: int = C.NOISE_SIZE, frame: int = 0, schedule: str = "white") -> np.ndarray:
     """Image-space horizon-based ambient occlusion (Bavoil, Sainz & Dimitrov 2008).
 
     For each direction theta (screen space; view-space (cos theta, sin theta, 0)) the tangent
@@ -69,6 +69,9 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
         and counts as no occluder (``"open"``).
     noise_size : int
         Edge of the texture in pixels (>= 1).
+    frame, schedule : int, str
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
 
     Returns
     -------
@@ -81,8 +84,8 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
     ValueError
         If ``gbuffer`` is not a GBuffer, ``radius`` is not a positive finite number,
         ``directions`` or ``steps`` is not an integer >= 1, ``angle_bias`` is not in
-        [0, pi/2), ``seed`` or ``noise_size`` is invalid, or ``offscreen`` is not one of its
-        values; the message names the argument.
+        [0, pi/2), ``seed``, ``noise_size`` or ``frame`` is invalid, or ``offscreen`` or
+        ``schedule`` is not one of its values; the message names the argument.
 
     Notes
     -----
@@ -129,7 +132,7 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
         raise ValueError(f"angle_bias must be in [0, pi/2) radians, got {angle_bias!r}")
     check_choice(offscreen, "offscreen", C.OFFSCREEN)
     check_int(noise_size, "noise_size")
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     R2 = radius * radius
     H, W = gb.depth.shape
 

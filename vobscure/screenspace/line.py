@@ -145,7 +145,8 @@ def _intervals_line_integral(lo, hi, occupied, z_s, falloff):
 @C.inner_frame
 def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "nearest",
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+            schedule: str = "white") -> np.ndarray:
     """Volumetric Obscurance by line sampling (Loos & Sloan 2010, Sec. 4.1).
 
     For each disk sample (x, y) of the pattern, the chord [-z_s, z_s] of the unit sphere
@@ -205,6 +206,9 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     noise_size : int, optional
         Edge of the tiled random texture in pixels, as for :func:`vobscure.vo_point`
         (default 4). Unused without ``randomize``.
+    frame, schedule : int, str, optional
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
 
     Returns
     -------
@@ -278,7 +282,7 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     intervals = C.solid_intervals(gbuffer, thickness)
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff,
                                thickness=None if intervals is not None else thickness, noise_size=noise_size)
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    texture = C.noise_texture(noise_size, seed, 2, randomize, frame=frame, schedule=schedule)
     prepared = C.frame(gbuffer, radius)
     gb, depth64, index = prepared
     options = dict(radius=radius, normal_clamp=normal_clamp, thickness=thickness, falloff=falloff,

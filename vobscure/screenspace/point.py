@@ -24,14 +24,14 @@ __all__ = ["vo_point", "vo_reference", "point_taps"]
 
 
 def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thickness, falloff,
-              randomize, seed, fetch, offscreen, noise_size, intervals=None):
+              randomize, seed, fetch, offscreen, noise_size, intervals=None, frame=0, schedule="white"):
     """Point-sampled VO (:func:`vo_point`); ``intervals``: the G-buffer's solid intervals
     (``thickness="layers"``, resolved by the caller; ``thickness`` is then None)."""
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness,
                                noise_size=noise_size)
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     kernel = partial(_point_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
                      thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
                      texture=texture, intervals=intervals)
@@ -202,7 +202,8 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
 @C.inner_frame
 def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, thickness=None,
              falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "bilinear",
-             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+             schedule: str = "white") -> np.ndarray:
     """Volumetric Obscurance by point sampling of the ball (Loos & Sloan 2010, Sec. 4).
 
     Each 3-D sample X = p + R s of the ball pattern is projected to the screen and is
@@ -270,6 +271,13 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         Edge of the tiled random texture in pixels (>= 1, default
         ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
         (i mod noise_size, j mod noise_size). Unused without ``randomize``.
+    frame : int, optional
+        The frame (>= 0, default 0) of the noise ``schedule``.
+    schedule : {"white", "rotate", "r2", "gtao"}, optional
+        How the texture changes from frame to frame (:mod:`vobscure.screenspace.noise`,
+        ``docs/screenspace.md``, "Noise schedules"): ``"white"`` (default; frame 0 is the
+        texture above), ``"rotate"``, ``"r2"`` or ``"gtao"`` (a 64 x 64 tile whatever
+        ``noise_size``). Both are unused without ``randomize`` (and checked either way).
 
     Returns
     -------
@@ -284,8 +292,8 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         If ``gbuffer`` is not a GBuffer, ``radius`` is not a positive finite number,
         ``thickness`` is neither None, a positive finite number nor ``"layers"`` (or is
         ``"layers"`` and ``gbuffer.intervals`` is None), ``samples`` is neither a count >= 1
-        nor a ball pattern, ``seed`` or ``noise_size`` is invalid, or a choice argument is not
-        one of its values; the message names the argument.
+        nor a ball pattern, ``seed``, ``noise_size`` or ``frame`` is invalid, or a choice argument
+        (``schedule`` among them) is not one of its values; the message names the argument.
 
     Notes
     -----
@@ -338,7 +346,7 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
     return _point_vo(gbuffer, radius=radius, pattern=C.as_pattern(samples, 3), normal_clamp=normal_clamp,
                      thickness=None if intervals is not None else thickness, falloff=falloff,
                      randomize=randomize, seed=seed, fetch=fetch, offscreen=offscreen, noise_size=noise_size,
-                     intervals=intervals)
+                     intervals=intervals, frame=frame, schedule=schedule)
 
 
 @C.inner_frame

@@ -34,7 +34,8 @@ def sao_taps(samples: int) -> int:
     return check_int(samples, "samples")
 
 
-def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_size, seed, randomize):
+def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_size, seed, randomize, frame,
+           schedule):
     """The arguments :func:`alchemy` and :func:`sao` share, validated, and the rotation texture:
     ``(gb, radius, samples, sigma, k, epsilon, beta, texture)``."""
     gb = C.as_gbuffer(gbuffer)
@@ -46,7 +47,7 @@ def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_s
     check_choice(offscreen, "offscreen", C.OFFSCREEN)
     check_int(noise_size, "noise_size")
     beta = check_positive(beta, "beta", allow_zero=True)
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    texture = C.noise_texture(noise_size, seed, 2, randomize, frame=frame, schedule=schedule)
     return gb, radius, samples, sigma, k, epsilon, beta, texture
 
 
@@ -162,7 +163,8 @@ def _dot_products(px: C.Pixels):
 @C.inner_frame
 def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, sigma: float = 1.0,
             k: float = 1.0, epsilon: float = 1e-4, randomize: bool = True, seed=0,
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+            schedule: str = "white") -> np.ndarray:
     """Alchemy screen-space ambient obscurance (McGuire, Osman, Bukowski & Hennessy 2011).
 
     For each pixel's view-space point C with normal n, ``samples`` taps on the projection
@@ -203,6 +205,9 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
         ``"clamp"``) or finds no occluder (``"open"``).
     noise_size : int
         Edge of the rotation texture in pixels (>= 1).
+    frame, schedule : int, str
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
 
     Returns
     -------
@@ -242,7 +247,8 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     1.0
     """
     gb, radius, s, sigma, k, epsilon, beta, texture = _check(gbuffer, radius, samples, sigma, k, epsilon, beta,
-                                                             offscreen, noise_size, seed, randomize)
+                                                             offscreen, noise_size, seed, randomize, frame,
+                                                             schedule)
     i = np.arange(s)
     rho = np.sqrt((i + 0.5) / s)
     theta = i * GOLDEN_ANGLE
@@ -278,7 +284,8 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
 @C.inner_frame
 def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: float = 0.01,
         sigma: float = 1.0, k: float = 1.0, epsilon: float = 0.01, randomize: bool = True, seed=0,
-        offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+        offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+        schedule: str = "white") -> np.ndarray:
     """Scalable Ambient Obscurance (McGuire, Mara & Luebke 2012).
 
     Taps on the SAO spiral: tap i of s has alpha_i = (i + 1/2) / s, screen-space distance
@@ -310,7 +317,7 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
         Intensity (in units of the radius, see :func:`alchemy`) and contrast exponent.
     epsilon : float
         Regularizer of the denominator as a fraction of r^2 (> 0, default 0.01).
-    randomize, seed, offscreen, noise_size
+    randomize, seed, offscreen, noise_size, frame, schedule
         As for :func:`alchemy` (phi from the texture; phi = 0 without ``randomize``).
 
     Returns
@@ -362,7 +369,8 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     1.0
     """
     gb, radius, s, sigma, k, epsilon, beta, texture = _check(gbuffer, radius, samples, sigma, k, epsilon, beta,
-                                                             offscreen, noise_size, seed, randomize)
+                                                             offscreen, noise_size, seed, randomize, frame,
+                                                             schedule)
     tau = check_int(turns, "turns")
     # SAO's spiral (reference shader, tapLocation): alpha_i = (i + 0.5) / s, h_i = r' alpha_i,
     # theta_i = 2 pi alpha_i tau + phi
