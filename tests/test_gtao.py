@@ -265,3 +265,19 @@ def test_step_jitter_r1_is_xegtaos_and_optional(crease_view):
         gtao(gb, radius=0.5, step_jitter="golden")
     with pytest.raises(ValueError, match="step_jitter"):
         gtao_bent_normals(gb, radius=0.5, step_jitter="R1")
+
+
+def test_unclipped_one_slice_frames_average_to_the_integral():
+    # An open plane seen obliquely: GTAO's integral is 1. One slice per frame at a random angle
+    # is unbiased only unclipped (a slice's estimate can exceed 1); clipped frames average darker.
+    # Frames are independent (white noise per frame): a z-test on the mean of the frames' means.
+    cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(16, 16), fov_y=40)
+    gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+    frames = 64
+    for clip in (False, True):
+        means = np.array([np.nanmean(gtao(gb, radius=0.3, slices=1, frame=n, clip=clip)) for n in range(frames)])
+        z = (means.mean() - 1.0) / (means.std(ddof=1) / np.sqrt(frames))
+        if clip:
+            assert z < -5.0
+        else:
+            assert abs(z) < 3.29          # two-sided, false-failure rate 1e-3

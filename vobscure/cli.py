@@ -112,6 +112,26 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--screen-samples", type=int, default=SCREEN_SAMPLES,
                    help=f"view-ray segments per pixel of the converged screen-space VO (default {SCREEN_SAMPLES})")
     c.add_argument("--orbit", type=int, default=0, metavar="N", help="N-frame camera orbit: temporal flicker")
+    seq = c.add_argument_group("frame sequences: the error after N frames (docs/temporal.md)")
+    seq.add_argument("--frames", type=int, default=0, metavar="N",
+                     help="run every method over N frames, accumulate, and score each frame (temporal.csv, "
+                          "temporal.png, the verdict's frame sentences)")
+    seq.add_argument("--motion", choices=("static", "orbit", "dolly"), default="static",
+                     help="the camera path of the frames (default static)")
+    seq.add_argument("--step", type=float, default=None, metavar="X",
+                     help="per-frame step: degrees for orbit (default 0.5), fraction of the eye-target distance "
+                          "for dolly (default 0.005)")
+    seq.add_argument("--cameras", type=Path, default=None, metavar="FILE",
+                     help="a JSON list of camera records (Camera.to_dict) as the path, in place of --motion")
+    seq.add_argument("--schedule", default="white", metavar="LIST",
+                     help="noise schedules per frame, comma-separated: white, rotate, r2, gtao (default white)")
+    seq.add_argument("--accumulate", default="mean", metavar="LIST",
+                     help="accumulations, comma-separated: mean, ema:ALPHA, clip:ALPHA (default mean)")
+    seq.add_argument("--clamp", action="store_true", help="clamp the history to the new frame's 3x3 range")
+    seq.add_argument("--no-reprojection", dest="reproject", action="store_false",
+                     help="use the history in place (shows the ghosting that reprojection avoids)")
+    seq.add_argument("--denoise", choices=("before", "after"), default=None,
+                     help="the bilateral blur on each frame before accumulating, or on the accumulated image")
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--target-rmse", type=float, default=None, metavar="X",
                    help="the accuracy to meet against each method's own reference "
@@ -253,10 +273,25 @@ def _compare_main(args) -> int:
                      screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit,
                      target_rmse=args.target_rmse, budget_ms=args.budget_ms, suggest=args.suggest,
                      quick=args.quick, out=args.out, cache=cache, progress=not args.quiet,
-                     allow_open=args.allow_open)
+                     allow_open=args.allow_open, **_sequence_options(args))
     if not args.quiet:
         print(report_text(result))
     return 0
+
+
+def _sequence_options(args) -> dict:
+    """compare()'s frame-sequence keywords from the command line (--frames, --cameras, ...)."""
+    opts = dict(frames=args.frames, motion=args.motion, step=args.step, schedules=args.schedule,
+                accumulate=args.accumulate, clamp=args.clamp, reproject=args.reproject, denoise=args.denoise)
+    if args.frames < 0:
+        raise ValueError(f"--frames must be a number of frames >= 0, got {args.frames}")
+    if args.cameras is not None:
+        from .temporal import cameras_from_file
+
+        opts["cameras"] = cameras_from_file(args.cameras)
+    elif args.frames == 1:
+        raise ValueError("--frames needs at least 2 frames (or --cameras FILE)")
+    return opts
 
 
 def _figures_main(args) -> int:

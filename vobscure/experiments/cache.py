@@ -510,6 +510,18 @@ class ReferenceCache:
 
 
 # ----------------------------------------------------------------------------- helpers
+def open_cache(cache) -> ReferenceCache:
+    """The cache a job's ``cache`` argument names: True the default user folder, a path that
+    folder, False or None no cache, a :class:`ReferenceCache` itself."""
+    if isinstance(cache, ReferenceCache):
+        return cache
+    if cache is True:
+        return ReferenceCache()
+    if cache is False or cache is None:
+        return ReferenceCache(enabled=False)
+    return ReferenceCache(cache)
+
+
 def _as_cache(cache) -> ReferenceCache:
     if cache is None:
         return ReferenceCache(enabled=False)

@@ -49,7 +49,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
          thin_occluder: float = 0.0, thickness=None, power: float = 1.0, normal_fudge: float = 0.0,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
          noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
-         schedule: str = "white") -> np.ndarray:
+         schedule: str = "white", clip: bool = True) -> np.ndarray:
     """Cosine-weighted ambient occlusion within ``radius`` by horizon search (GTAO).
 
     For each pixel (view-space point p, normal n, view vector v from p to the camera),
@@ -99,6 +99,14 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     normal_fudge : float, optional
         XeGTAO's "slight overdarkening on high slopes" fudge, in [0, 1] (default 0): the
         projected normal's length l becomes l + normal_fudge (1 - l). XeGTAO ships 0.05.
+    clip : bool, optional
+        Clip the visibility to [0, 1] (default True). With few slices the estimate of one
+        pixel can exceed 1 (a slice's weight is its projected normal's length, exact only on
+        average over the slice angle); clipped frames then average to a darker image. False
+        keeps the unclipped value, whose mean over random slice angles is the integral: what
+        a sequence accumulates (XeGTAO likewise keeps its raw term unclipped, "can overshoot
+        1 but will later average out to 1", ``XE_GTAO_OCCLUSION_TERM_SCALE`` in
+        ``XeGTAO.h``). ``power`` is applied after the clip, and only to values >= 0.
     randomize : bool, optional
         Rotate the slices and jitter the steps per pixel from a tiled noise texture
         (default True). False: u = 1/2 for both (a midpoint rule; ``seed`` unused).
@@ -222,7 +230,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
     texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
-    kernel = partial(_gtao_kernel, radius=radius, texture=texture, **options)
+    kernel = partial(_gtao_kernel, radius=radius, texture=texture, clip=bool(clip), **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
@@ -321,7 +329,7 @@ def _fraction(value, name):
 
 
 def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, power, normal_fudge, fetch,
-                 offscreen, texture, r1_jitter=False, bent=False, intervals=None):
+                 offscreen, texture, r1_jitter=False, bent=False, intervals=None, clip=True):
     """GTAO of one chunk of pixels (see :func:`gtao`): loops over slices and steps only.
 
     Returns the (k,) visibility, or with ``bent`` the (k, 3) unnormalized bent normal. With
@@ -396,9 +404,10 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
     if bent:
         return bent_normal
     visibility /= slices
-    np.clip(visibility, 0.0, 1.0, out=visibility)
+    if clip:
+        np.clip(visibility, 0.0, 1.0, out=visibility)
     if power != 1.0:
-        visibility **= power
+        np.power(visibility, power, out=visibility, where=visibility >= 0)
     return visibility
 
 
