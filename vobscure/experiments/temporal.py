@@ -295,7 +295,8 @@ def run(scene, configs, *, camera=None, size=None, frames: int = 8, motion: str 
                        accumulate=c.accumulate.label, clamp=c.clamp, reproject=c.reproject, denoise=c.denoise,
                        frame=n + 1, estimator_ms=1e3 * t_est, accumulate_ms=1e3 * t_acc,
                        ms=1e3 * (t_est + t_acc), total_ms=1e3 * total[c.label],
-                       disoccluded=restarted / covered if covered and n > 0 else 0.0, own_reference=own(c))
+                       disoccluded=restarted / covered if covered and n > 0 else 0.0, own_reference=own(c),
+                       quantity=c.method.quantity(normal_clamp))
             for name, ref in refs.items():
                 e = error(out, ref)
                 row[f"rmse_{name}"] = e.rmse
@@ -339,63 +340,84 @@ def _pick(cands, key):
 
 
 def temporal_verdict(rows, configs, *, target_rmse=None, motion="static", missing=None) -> dict:
-    """Sentences and numbers from :func:`run`'s rows: which configuration reaches the target error
-    after :data:`VERDICT_FRAMES` frames (or the last) at the least time per frame, and how that
-    differs from the one-frame answer; the frames each needs to reach the target.
+    """Sentences and numbers from :func:`run`'s rows: per reference, which configuration reaches the
+    target error after :data:`VERDICT_FRAMES` frames (or the last) at the least time per frame,
+    and how that differs from the one-frame answer; the frames each needs to reach the target.
 
-    Each configuration is scored against its own reference (``own_reference``); the time per
-    frame is the median over the frames of the estimator plus the accumulation.
+    Each configuration is scored against its own reference (``own_reference``) and, when the
+    converged screen-space VO is the limit of its quantity, against ``"screen"`` as well (the
+    sampling error alone, what accumulation reduces). The time per frame is the median over
+    the frames of the estimator plus the accumulation.
+
+    Returns
+    -------
+    dict
+        ``text`` (sentences), ``frames``, ``verdict_frames`` (K), ``ms_per_frame`` (per
+        configuration) and ``groups``: per reference ``reference``, ``configs``,
+        ``target_rmse``, ``winner`` (least time per frame reaching the target by frame K, or
+        None), ``one_frame_winner`` (the same in one frame), ``frames_to_target`` (per
+        configuration: the first frame at or below the target, or None).
     """
     labels = [c.label for c in configs]
     by = {lab: [r for r in rows if r["config"] == lab] for lab in labels}
     N = max(len(v) for v in by.values())
     K = min(VERDICT_FRAMES, N)
-    own = {lab: by[lab][0]["own_reference"] for lab in labels}
-    err = {lab: [r[f"rmse_{own[lab]}"] for r in by[lab]] for lab in labels}
     per_frame = {lab: float(np.median([r["ms"] for r in by[lab]])) for lab in labels}
-    best_k = min((err[lab][K - 1] for lab in labels if np.isfinite(err[lab][K - 1])), default=float("nan"))
-    target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best_k
-    reach = {lab: frames_to_target(err[lab], target) for lab in labels}
-    text = []
-    if missing:
-        text.append("Missing references: " + "; ".join(f"{k} is replaced by {v}" if v else f"{k} is not available"
-                                                         for k, v in missing.items()) + ".")
+    members = {}
+    for lab in labels:
+        first = by[lab][0]
+        members.setdefault(first["own_reference"], []).append(lab)
+        q = first.get("quantity")
+        if first["own_reference"] != "screen" and "rmse_screen" in first and q is not None \
+                and _methods.QUANTITIES[q].screen_limit:
+            members.setdefault("screen", []).append(lab)
+    order = _references.names()
     words = {"static": "a static camera", "orbit": "an orbiting camera", "dolly": "a dolly",
              "list": "the cameras given"}.get(motion, motion)
-    text.append(f"Over {N} frame(s) with {words}, each configuration against its own reference; target RMSE "
-                f"{target:.4f}" + ("" if target_rmse is not None else f" ({TARGET_FACTOR:g} x the best after {K} frames)")
-                + ".")
-    ok_k = [lab for lab in labels if reach[lab] is not None and reach[lab] <= K]
-    win = _pick(ok_k, lambda lab: per_frame[lab])
-    if win is not None:
-        text.append(f"After {K} frames, {win} reaches it at the least time per frame: RMSE {err[win][K - 1]:.4f} "
-                    f"against {own[win]} at {per_frame[win]:.1f} ms a frame (reached at frame {reach[win]}).")
-    else:
-        close = _pick(labels, lambda lab: err[lab][K - 1])
-        text.append(f"No configuration reaches it within {K} frames; the closest is {close} "
-                    f"(RMSE {err[close][K - 1]:.4f} against {own[close]}).")
-    ok_1 = [lab for lab in labels if reach[lab] == 1]
-    one = _pick(ok_1, lambda lab: per_frame[lab])
-    if one is not None:
-        same = " the same answer" if one == win else ""
-        text.append(f"In one frame the answer would be{same} {one} (RMSE {err[one][0]:.4f} at "
-                    f"{per_frame[one]:.1f} ms).")
-    else:
-        first = _pick(labels, lambda lab: err[lab][0])
-        text.append(f"No configuration reaches the target in one frame (the most accurate single frame: {first}, "
-                    f"RMSE {err[first][0]:.4f}): accumulation is what makes the cheap ones usable.")
-    never = [lab for lab in labels if reach[lab] is None]
-    if never:
-        text.append(f"Not reached within {N} frames: {', '.join(never)}"
-                    + (" (a periodic schedule stops improving after its period, and a moving average "
-                       "keeps a floor of noise: see docs/temporal.md)." if N >= K else "."))
-    return dict(text=text, target_rmse=target, verdict_frames=K, frames=N, winner=win, one_frame_winner=one,
-                frames_to_target=reach, ms_per_frame=per_frame, own_reference=own)
+    text = []
+    if missing:
+        text.append("Missing references in the frames: " + "; ".join(
+            f"{k} is replaced by {v}" if v else f"{k} is not available" for k, v in missing.items()) + ".")
+    text.append(f"Over {N} frame(s) with {words} (docs/temporal.md), time per frame = the estimator plus the "
+                f"accumulation (median over the frames):")
+    groups = []
+    for ref in sorted(members, key=order.index):
+        labs = members[ref]
+        err = {lab: [r[f"rmse_{ref}"] for r in by[lab]] for lab in labs}
+        best_k = min((err[lab][K - 1] for lab in labs if np.isfinite(err[lab][K - 1])), default=float("nan"))
+        target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best_k
+        reach = {lab: frames_to_target(err[lab], target) for lab in labs}
+        win = _pick([lab for lab in labs if reach[lab] is not None and reach[lab] <= K], lambda lab: per_frame[lab])
+        one = _pick([lab for lab in labs if reach[lab] == 1], lambda lab: per_frame[lab])
+        what = "the converged screen-space VO (the sampling error)" if ref == "screen" else f"{ref!r}"
+        head = (f"Against {what}, target RMSE {target:.4f}"
+                + ("" if target_rmse is not None else f" ({TARGET_FACTOR:g} x the best after {K} frames)") + ": ")
+        if win is not None:
+            line = (f"after {K} frames {win} reaches it at the least time per frame (RMSE {err[win][K - 1]:.4f} "
+                    f"at {per_frame[win]:.1f} ms, reached at frame {reach[win]})")
+        else:
+            close = _pick(labs, lambda lab: err[lab][K - 1])
+            line = (f"no configuration reaches it within {K} frames (closest: {close}, RMSE "
+                    f"{err[close][K - 1]:.4f})")
+        if one is not None:
+            line += ("; in one frame the answer is the same" if one == win else
+                     f"; in one frame the answer would be {one} (RMSE {err[one][0]:.4f} at {per_frame[one]:.1f} ms)")
+        else:
+            first = _pick(labs, lambda lab: err[lab][0])
+            line += (f"; no configuration reaches it in one frame (the best single frame: {first}, RMSE "
+                     f"{err[first][0]:.4f})")
+        never = [lab for lab in labs if reach[lab] is None]
+        if never and len(never) < len(labs):
+            line += f". Not within {N} frames: {', '.join(never)}"
+        text.append(head + line + ".")
+        groups.append(dict(reference=ref, configs=labs, target_rmse=target, winner=win, one_frame_winner=one,
+                           frames_to_target=reach))
+    return dict(text=text, frames=N, verdict_frames=K, ms_per_frame=per_frame, groups=groups)
 
 
 def plot(path, result: TemporalResult):
     """Error against frames and against the accumulated time, per configuration (its own
-    reference: solid; the converged screen-space VO: dotted), on log axes; the target dashed."""
+    reference: solid; the converged screen-space VO: dotted), on log axes."""
     fig = new_figure(10.0, 4.0)
     ax1, ax2 = fig.subplots(1, 2)
     labels = list(dict.fromkeys(r["config"] for r in result.rows))
@@ -412,10 +434,7 @@ def plot(path, result: TemporalResult):
             e = [r[key] for r in rows]
             ax1.plot(f, e, style, color=colours[lab], label=f"{lab} vs {ref}")
             ax2.plot(t, e, style, color=colours[lab])
-    target = result.summary.get("target_rmse")
     for ax in (ax1, ax2):
-        if target and np.isfinite(target):
-            ax.axhline(target, color="0.4", lw=0.8, ls="--")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_ylabel("RMSE of the accumulated image")
@@ -423,5 +442,5 @@ def plot(path, result: TemporalResult):
     ax1.set_xlabel("frame")
     ax2.set_xlabel("accumulated time (ms)")
     ax1.legend(fontsize=7)
-    fig.suptitle("Error after N frames (dashed: the target)")
+    fig.suptitle("Error of the accumulated image after N frames (solid: own reference; dotted: screen-space VO)")
     return save_figure(fig, path)
