@@ -19,16 +19,16 @@ import vobscure as vo
 from vobscure.metrics import FLIP_PPD, flip
 
 #: FLIP runs in float32. Its derivative filters, normalized in float32, leave a response of
-#: order 1e-7 on a uniform image; the feature term takes its square root (q_f = 1/2, Sec. 4.2),
+#: order 1e-7 on a uniform image; the feature term takes its square root (q_f = 1/2),
 #: a few 1e-4, and FLIP is the colour error dE_c raised to 1 - that: a relative change of
 #: about 4e-4 |ln dE_c|, under 1e-3 for the colour errors used here (dE_c > 0.09, |ln dE_c| <
 #: 2.5). Measured: 1.3e-5 to 3.0e-4, with deviation / |ln dE_c| between 1.8e-4 and 4e-4.
 UNIFORM_REL = 1e-3
-#: Radius (pixels) of FLIP's widest filter at ppd: three standard deviations of the widest
-#: contrast-sensitivity Gaussian (scale b = 0.04 deg^2, sigma = sqrt(b / (2 pi^2)) deg, the
-#: blue-yellow channel's first term, Table 1 of the paper) or of the feature detectors
-#: (sigma = w / 2 with w = 0.082 deg, Sec. 4.2). The flip-evaluator source rounds both up
-#: (``calculateSpatialFilterRadius`` and ``setFeatureFilter`` in FLIP.h).
+#: Radius (pixels) of FLIP's widest filter at ppd: three standard deviations, rounded up, of
+#: the widest contrast-sensitivity Gaussian (scale b = 0.04 deg^2, sigma = sqrt(b / (2 pi^2))
+#: deg, the blue-yellow channel's first term) or of the feature detectors (sigma = w / 2 with
+#: w = 0.082 deg), as FLIP's reference implementation sizes them (FLIP.h,
+#: ``calculateSpatialFilterRadius`` and ``setFeatureFilter``).
 
 
 def support_radius(ppd: float) -> int:
@@ -65,7 +65,7 @@ def hunt(lab) -> np.ndarray:
 
 
 def hyab(a, b) -> float:
-    """HyAB: city-block in L, Euclidean in (a, b) (Abasi et al. 2020; Sec. 4.1)."""
+    """HyAB: city-block in L, Euclidean in (a, b) (Sec. 4.1)."""
     return abs(a[0] - b[0]) + math.hypot(a[1] - b[1], a[2] - b[2])
 
 

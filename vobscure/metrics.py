@@ -34,7 +34,7 @@ __all__ = ["ErrorReport", "error", "FlipReport", "flip", "FLIP_PPD", "TermSummar
 #: SSIM's default Gaussian-free window (scikit-image): 7 x 7, shrunk to fit small images.
 SSIM_WINDOW = 7
 #: FLIP's default observer, in pixels per degree of visual angle: a 0.7 m wide 3840-pixel
-#: display seen from 0.7 m (Andersson et al. 2020, Sec. 4; the flip-evaluator package's default).
+#: display seen from 0.7 m (the default of FLIP's reference implementation, 67.02 rounded).
 FLIP_PPD = 67.0
 #: Equal-count bins of the model's value in :func:`calibration_rmse`.
 CALIBRATION_BINS = 10
@@ -215,7 +215,7 @@ def flip(estimate, reference, *, mask=None, ppd: float = FLIP_PPD) -> FlipReport
     notice. Both images are filtered by the eye's contrast sensitivity at the viewing
     distance that ``ppd`` stands for and compared in a perceptual colour space (the HyAB
     distance of Hunt-adjusted CIELAB colours, remapped to [0, 1]; Andersson et al. 2020,
-    Sec. 4.1); the colour error is then raised where edges and points differ (Sec. 4.2).
+    Sec. 4.1); the colour error is then raised where edges and points differ (Sec. 4).
 
     Parameters
     ----------
