@@ -58,6 +58,17 @@ def test_files_and_rows(first_run):
     assert summary["text"] and summary["text"][0].startswith("Against the ray-cast world-space VO")
 
 
+def test_every_row_carries_flip_per_reference(first_run):
+    _, out, _ = first_run
+    rows = _rows(out / "results.csv")
+    for r in rows:
+        for ref in ("screen", "volumetric", "ao"):
+            assert 0 < float(r[f"{ref}_flip"]) < 1
+    header = next(line for line in (out / "results.md").read_text().splitlines() if line.startswith("| label"))
+    assert "| screen_flip |" in header and "ao_flip (model error)" in header
+    assert C.METRICS[-1] == "flip"
+
+
 def test_second_run_hits_the_cache_with_identical_numbers(first_run, tmp_path):
     argv, out, cache = first_run
     out2 = tmp_path / "again"

@@ -63,8 +63,8 @@ VEGETATION_METHODS = "hegeman,hegeman_ellipsoid,hegeman_multishell,reeves_blau,p
 #: Sizes of the default and the quick run.
 DEFAULT_SIZE = (256, 256)
 QUICK_SIZE = (64, 64)
-#: Metrics kept per reference.
-METRICS = ("rmse", "mae", "bias", "ssim")
+#: Metrics kept per reference (fields of :class:`~vobscure.metrics.ErrorReport`; flip: the mean FLIP).
+METRICS = ("rmse", "mae", "bias", "ssim", "flip")
 #: Thicknesses (fractions of the radius) tried when the screen-space error dominates.
 SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
 
