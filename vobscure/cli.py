@@ -578,12 +578,12 @@ def _estimate_main(args) -> int:
             print(f"  wrote {len(outs)} files: {outs[0]} ... {outs[-1]}")
     if many and not args.quiet:
         if references:
-            f = flicker(np.stack(frames), np.stack(references))
+            f = flicker(np.stack(frames), np.stack(references), flip=False)
             print(f"  flicker: {f.value:.5f} (mean |V(t+1) - V(t)| = {f.estimate_change:.5f} less the "
                   f"reference's {f.reference_change:.5f}, vo_reference with {args.flicker_reference} samples) "
                   f"over {f.pairs} pixel pairs ({f.ignored} skipped)")
         else:
-            f = flicker(np.stack(frames))
+            f = flicker(np.stack(frames), flip=False)
             print(f"  flicker: mean |V(t+1) - V(t)| = {f.estimate_change:.5f} over {f.pairs} pixel pairs "
                   f"({f.ignored} undefined skipped); it includes the real change of the frames "
                   f"(--flicker-reference SAMPLES subtracts it)")

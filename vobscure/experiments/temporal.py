@@ -110,8 +110,10 @@ class TemporalResult:
         ``total_ms`` (accumulated over the frames so far), ``disoccluded`` (fraction of the
         covered pixels whose history restarted in this frame), ``own_reference``, and per
         reference REF ``rmse_REF``, ``bias_REF``, ``one_frame_rmse_REF`` (the frame alone),
-        ``flicker_REF`` (frame pair n-1, n; NaN at frame 1) and ``flip_REF`` when the metrics
-        report FLIP.
+        ``flicker_REF`` (frame pair n-1, n, less the reference's own change; NaN at frame 1),
+        ``flip`` (FLIP of the accumulated image against the own reference,
+        :func:`vobscure.metrics.flip`) and ``flicker_flip`` (FLIP of frame n against frame
+        n - 1 of the accumulated sequence: the change the eye sees; NaN at frame 1).
     series : list of dict
         ``{"config": label, "reference": REF, "rmse": [per frame]}`` for every configuration and
         reference (``summary.json``'s ``"temporal"``).
@@ -297,16 +299,21 @@ def run(scene, configs, *, camera=None, size=None, frames: int = 8, motion: str 
                        ms=1e3 * (t_est + t_acc), total_ms=1e3 * total[c.label],
                        disoccluded=restarted / covered if covered and n > 0 else 0.0, own_reference=own(c),
                        quantity=c.method.quantity(normal_clamp))
+            own_ref = own(c)
+            p = prev[c.label]
             for name, ref in refs.items():
-                e = error(out, ref)
+                # FLIP (a second per megapixel) only against the configuration's own reference
+                e = error(out, ref, flip=name == own_ref)
                 row[f"rmse_{name}"] = e.rmse
                 row[f"bias_{name}"] = e.bias
-                if "flip" in e.as_dict():
-                    row[f"flip_{name}"] = e.as_dict()["flip"]
-                row[f"one_frame_rmse_{name}"] = error(x, ref).rmse
-                p = prev[c.label]
-                row[f"flicker_{name}"] = (flicker(np.stack([p[0], out]), np.stack([p[1][name], ref])).value
+                row[f"one_frame_rmse_{name}"] = error(x, ref, flip=False).rmse
+                row[f"flicker_{name}"] = (flicker(np.stack([p[0], out]), np.stack([p[1][name], ref]), flip=False).value
                                           if p is not None else float("nan"))
+                if name == own_ref:
+                    row["flip"] = e.flip
+            # FLIP between this accumulated frame and the last, as the eye sees the change
+            row["flicker_flip"] = (flicker(np.stack([p[0], out]), flip=True).estimate_flip
+                                   if p is not None else float("nan"))
             prev[c.label] = (out, refs)
             last[c.label] = out
             rows.append(row)
