@@ -126,32 +126,61 @@ def _in_place(hist, cnt, current: GBuffer, previous: GBuffer, tol: float) -> Rep
                         found=found, source=source, covered=np.array(valid))
 
 
-def _taps(pixels: np.ndarray, shape: tuple, fetch: str):
-    """The previous-frame pixels (rows, cols) read at ``pixels`` and their weights: a list of
-    (i, j, w, inside) per tap."""
+def _taps(px: np.ndarray, py: np.ndarray, shape: tuple, fetch: str):
+    """The previous-frame pixels read at the continuous positions (px, py): per tap (rows, cols,
+    weight, inside), rows and cols clipped into the image (``inside`` says which were in it;
+    a NaN position is outside)."""
     H, W = shape
-    x = pixels[..., 0] - 0.5
-    y = pixels[..., 1] - 0.5
+    lost = ~(np.isfinite(px) & np.isfinite(py))
+    x = np.where(lost, -2.0, px - 0.5)
+    y = np.where(lost, -2.0, py - 0.5)
     if fetch == "nearest":
-        with np.errstate(invalid="ignore"):
-            j = np.rint(x)
-            i = np.rint(y)
-        corners = [(i, j, np.ones_like(x))]
+        corners = [(np.rint(y), np.rint(x), None)]
     else:
-        with np.errstate(invalid="ignore"):
-            j0 = np.floor(x)
-            i0 = np.floor(y)
+        j0 = np.floor(x)
+        i0 = np.floor(y)
         fx, fy = x - j0, y - i0
-        corners = [(i0, j0, (1 - fx) * (1 - fy)), (i0, j0 + 1, fx * (1 - fy)),
-                   (i0 + 1, j0, (1 - fx) * fy), (i0 + 1, j0 + 1, fx * fy)]
+        gx, gy = 1.0 - fx, 1.0 - fy
+        corners = [(i0, j0, gx * gy), (i0, j0 + 1, fx * gy), (i0 + 1, j0, gx * fy), (i0 + 1, j0 + 1, fx * fy)]
     out = []
     for i, j, w in corners:
-        with np.errstate(invalid="ignore"):
-            inside = (i >= 0) & (i < H) & (j >= 0) & (j < W)
-        ii = np.where(inside, i, 0).astype(np.intp)
-        jj = np.where(inside, j, 0).astype(np.intp)
+        inside = (i >= 0) & (i < H) & (j >= 0) & (j < W)
+        ii = np.clip(i, 0, H - 1, out=np.empty_like(i)).astype(np.intp)
+        jj = np.clip(j, 0, W - 1, out=np.empty_like(j)).astype(np.intp)
         out.append((ii, jj, w, inside))
     return out
+
+
+def _ray_tables(camera):
+    """(a_x, b_x) per column and (a_y, b_y) per row: the view-space point seen through pixel
+    centre (i, j) at depth z is (a_x[j] + b_x[j] z, a_y[i] + b_y[i] z, z) (perspective: a = 0;
+    orthographic: b = 0), from the camera's own unproject."""
+    W, H = camera.size
+    cols = np.column_stack([np.arange(W) + 0.5, np.full(W, 0.5)])
+    rows = np.column_stack([np.full(H, 0.5), np.arange(H) + 0.5])
+    c0, c1 = camera.unproject(cols, 0.0), camera.unproject(cols, 1.0)
+    r0, r1 = camera.unproject(rows, 0.0), camera.unproject(rows, 1.0)
+    return c0[:, 0], c1[:, 0] - c0[:, 0], r0[:, 1], r1[:, 1] - r0[:, 1]
+
+
+def _from_views(current, previous, i_c, j_c, z_c, idx):
+    """For the covered pixels (flat ``idx``, rows ``i_c``, columns ``j_c``, depth ``z_c``) of
+    ``current``: their continuous position (px, py) in ``previous``, their normals (3 arrays)
+    and tangent-plane offsets n . X in the previous view space, and their depth there."""
+    Rc, tc = current.view_transform
+    Rp, tp = previous.view_transform
+    # current view -> world -> previous view: p_prev = Rp Rc^T (p_cur - tc) + tp
+    M = Rp @ Rc.T
+    t = tp - M @ tc
+    ax, bx, ay, by = _ray_tables(current.camera)
+    X = ax[j_c] + bx[j_c] * z_c
+    Y = ay[i_c] + by[i_c] * z_c
+    P = [M[r, 0] * X + M[r, 1] * Y + M[r, 2] * z_c + t[r] for r in range(3)]
+    n = np.asarray(current.normal, dtype=np.float64).reshape(-1, 3)[idx]
+    n_p = [n @ M[r] for r in range(3)]
+    offset = n_p[0] * P[0] + n_p[1] * P[1] + n_p[2] * P[2]
+    pixels, _ = previous.camera.project(np.column_stack(P))
+    return pixels[:, 0], pixels[:, 1], n_p, offset, P[2]
 
 
 def reproject(history, current, previous, *, count=None, fetch: str = "bilinear",
@@ -218,44 +247,56 @@ def reproject(history, current, previous, *, count=None, fetch: str = "bilinear"
     zp_img = np.asarray(previous.depth, dtype=np.float64)
     if motion is None and _same_view(current, previous):
         return _in_place(hist, cnt, current, previous, tol)
+    H, W = current.shape
+    Hp, Wp = previous.shape
+    idx = np.flatnonzero(valid)
+    i_c, j_c = np.divmod(idx, W)
+    z_c = np.asarray(current.depth, dtype=np.float64).reshape(-1)[idx]
+    zp_flat = zp_img.reshape(-1)
     if motion is not None:
         m = np.asarray(motion, dtype=np.float64)
         if m.shape != current.shape + (2,):
             raise ValueError(f"motion must have shape {current.shape + (2,)}, got {m.shape}")
-        H, W = current.shape
-        jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-        pixels = np.stack([jj + m[..., 0], ii + m[..., 1]], axis=-1)
-        pixels[~valid] = np.nan
-        z = np.where(valid, np.asarray(current.depth, dtype=np.float64), np.nan)
+        m = m.reshape(-1, 2)[idx]
+        px, py = j_c + 0.5 + m[:, 0], i_c + 0.5 + m[:, 1]
 
-        def passes(i, j):
-            return np.abs(zp_img[i, j] - z) <= tol * z
+        def passes(flat, iq, jq):
+            return np.abs(zp_flat[flat] - z_c) <= tol * z_c
     else:
-        pixels, points, normals = previous_pixels(current, previous)
-        z = points[..., 2]
-        # the tangent plane's offset n . X, and each tap's point along its pixel ray
-        offset = np.einsum("...k,...k->...", normals, points)
-        cam = previous.camera
+        px, py, n_p, offset, z_p = _from_views(current, previous, i_c, j_c, z_c, idx)
+        ax, bx, ay, by = _ray_tables(previous.camera)
+        limit = tol * np.abs(z_p)
 
-        def passes(i, j):
-            centres = np.stack([j + 0.5, i + 0.5], axis=-1).astype(np.float64)
-            X_q = cam.unproject(centres, zp_img[i, j])
-            with np.errstate(invalid="ignore"):
-                return np.abs(np.einsum("...k,...k->...", normals, X_q) - offset) <= tol * np.abs(z)
+        def passes(flat, iq, jq):
+            # the tap's surface point along its pixel ray, against the current point's tangent plane
+            zq = zp_flat[flat]
+            d = n_p[0] * (ax[jq] + bx[jq] * zq) + n_p[1] * (ay[iq] + by[iq] * zq) + n_p[2] * zq
+            return np.abs(d - offset) <= limit
 
-    value_sum = np.zeros(current.shape)
-    weight = np.zeros(current.shape)
-    low = np.full(current.shape, np.iinfo(np.int32).max, dtype=np.int64)
-    for i, j, w, inside in _taps(pixels, previous.shape, fetch):
-        with np.errstate(invalid="ignore"):
-            ok = inside & valid & np.isfinite(hist[i, j]) & previous.valid[i, j] & passes(i, j)
-            ok &= w > 0
-        value_sum += np.where(ok, w * np.where(ok, hist[i, j], 0.0), 0.0)
-        weight += np.where(ok, w, 0.0)
-        low = np.where(ok, np.minimum(low, cnt[i, j]), low)
-    found = weight > 0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        value = np.where(found, value_sum / np.where(found, weight, 1.0), np.nan)
-    count_out = np.where(found, low, 0).astype(np.int32)
-    source = np.where(valid[..., None], pixels, np.nan)
+    hist_flat = hist.reshape(-1)
+    cnt_flat = cnt.reshape(-1)
+    k = len(idx)
+    value_sum = np.zeros(k)
+    weight = np.zeros(k)
+    low = np.full(k, np.iinfo(np.int32).max, dtype=np.int64)
+    with np.errstate(invalid="ignore", over="ignore"):
+        for iq, jq, w, inside in _taps(px, py, (Hp, Wp), fetch):
+            flat = iq * Wp + jq
+            h = hist_flat[flat]
+            ok = inside & np.isfinite(h) & passes(flat, iq, jq)
+            w_ok = ok if w is None else w * ok
+            value_sum += w_ok * np.where(ok, h, 0.0)
+            weight += w_ok
+            np.minimum(low, np.where(ok, cnt_flat[flat], low), out=low)
+    hit = weight > 0
+    found = np.zeros(H * W, bool)
+    found[idx] = hit
+    value = np.full(H * W, np.nan)
+    value[idx[hit]] = value_sum[hit] / weight[hit]
+    count_out = np.zeros(H * W, np.int32)
+    count_out[idx[hit]] = low[hit]
+    source = np.full((H * W, 2), np.nan)
+    source[idx, 0], source[idx, 1] = px, py
+    found, value, count_out = found.reshape(H, W), value.reshape(H, W), count_out.reshape(H, W)
+    source = source.reshape(H, W, 2)
     return Reprojection(value=value, count=count_out, found=found, source=source, covered=np.array(valid))
