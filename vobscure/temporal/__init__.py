@@ -18,12 +18,12 @@ from .accumulate import (ACCUMULATE_MODES, DENOISE_STEPS, HISTORY_BYTES_PER_PIXE
                          Accumulator, neighbourhood_moments, neighbourhood_range, parse_accumulate)
 from .paths import (DOLLY_FRACTION_PER_FRAME, MOTIONS, ORBIT_DEGREES_PER_FRAME, camera_path, cameras_from_file,
                     cameras_from_records, dolly_camera, orbit_camera)
-from .reproject import DEPTH_TOLERANCE, REPROJECT_FETCHES, Reprojection, previous_pixels, reproject
+from .reproject import CHUNK_PIXELS, DEPTH_TOLERANCE, REPROJECT_FETCHES, Reprojection, reproject
 
 __all__ = [
     "ACCUMULATE_MODES", "DENOISE_STEPS", "HISTORY_BYTES_PER_PIXEL", "VARIANCE_GAMMA", "AccumulateSpec",
     "Accumulator", "neighbourhood_moments", "neighbourhood_range", "parse_accumulate",
     "DOLLY_FRACTION_PER_FRAME", "MOTIONS", "ORBIT_DEGREES_PER_FRAME", "camera_path", "cameras_from_file",
     "cameras_from_records", "dolly_camera", "orbit_camera",
-    "DEPTH_TOLERANCE", "REPROJECT_FETCHES", "Reprojection", "previous_pixels", "reproject",
+    "CHUNK_PIXELS", "DEPTH_TOLERANCE", "REPROJECT_FETCHES", "Reprojection", "reproject",
 ]

@@ -18,13 +18,15 @@ import numpy as np
 from .._validate import check_choice, check_positive
 from ..gbuffer import GBuffer
 
-__all__ = ["DEPTH_TOLERANCE", "REPROJECT_FETCHES", "Reprojection", "previous_pixels", "reproject"]
+__all__ = ["DEPTH_TOLERANCE", "REPROJECT_FETCHES", "CHUNK_PIXELS", "Reprojection", "reproject"]
 
 #: Default tolerance of the same-surface test, as a fraction of the depth: a previous-frame tap
 #: counts when its surface point lies within 1 % of the depth of the current point's tangent plane.
 DEPTH_TOLERANCE = 0.01
 #: How the history is read at the reprojected position.
 REPROJECT_FETCHES = ("bilinear", "nearest")
+#: Pixels per block of the reprojection (bounds its temporaries to a few MB).
+CHUNK_PIXELS = 32768
 
 
 @dataclass(frozen=True)
@@ -65,38 +67,6 @@ def _as_gbuffer(value, name: str) -> GBuffer:
     if not isinstance(value, GBuffer):
         raise ValueError(f"{name} must be a vobscure.GBuffer, got {type(value).__name__}")
     return value.inner()
-
-
-def previous_pixels(current, previous) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where the covered pixels of ``current`` were seen in ``previous``, from the two views.
-
-    Parameters
-    ----------
-    current, previous : GBuffer
-        The two frames (their inner frames when they have a guard band); both views need a
-        world frame (a camera with a pose, or ``view=`` given to ``from_arrays``).
-
-    Returns
-    -------
-    pixels : (H, W, 2) float64
-        Continuous (x, y) in the previous image; NaN on background and behind its camera.
-    points : (H, W, 3) float64
-        The current surface points in the previous view space; NaN on background.
-    normals : (H, W, 3) float64
-        The current shading normals in the previous view space; 0 on background.
-    """
-    current = _as_gbuffer(current, "current")
-    previous = _as_gbuffer(previous, "previous")
-    Rc, tc = current.view_transform
-    Rp, tp = previous.view_transform
-    # current view -> world -> previous view: p_prev = Rp Rc^T (p_cur - tc) + tp
-    M = Rp @ Rc.T
-    t = tp - M @ tc
-    pos = np.asarray(current.position, dtype=np.float64)
-    points = pos @ M.T + t
-    normals = np.asarray(current.normal, dtype=np.float64) @ M.T
-    pixels, _ = previous.camera.project(points)
-    return pixels, points, normals
 
 
 def _same_view(current: GBuffer, previous: GBuffer) -> bool:
@@ -163,24 +133,74 @@ def _ray_tables(camera):
     return c0[:, 0], c1[:, 0] - c0[:, 0], r0[:, 1], r1[:, 1] - r0[:, 1]
 
 
-def _from_views(current, previous, i_c, j_c, z_c, idx):
-    """For the covered pixels (flat ``idx``, rows ``i_c``, columns ``j_c``, depth ``z_c``) of
-    ``current``: their continuous position (px, py) in ``previous``, their normals (3 arrays)
-    and tangent-plane offsets n . X in the previous view space, and their depth there."""
-    Rc, tc = current.view_transform
-    Rp, tp = previous.view_transform
-    # current view -> world -> previous view: p_prev = Rp Rc^T (p_cur - tc) + tp
-    M = Rp @ Rc.T
-    t = tp - M @ tc
-    ax, bx, ay, by = _ray_tables(current.camera)
-    X = ax[j_c] + bx[j_c] * z_c
-    Y = ay[i_c] + by[i_c] * z_c
-    P = [M[r, 0] * X + M[r, 1] * Y + M[r, 2] * z_c + t[r] for r in range(3)]
-    n = np.asarray(current.normal, dtype=np.float64).reshape(-1, 3)[idx]
-    n_p = [n @ M[r] for r in range(3)]
-    offset = n_p[0] * P[0] + n_p[1] * P[1] + n_p[2] * P[2]
-    pixels, _ = previous.camera.project(np.column_stack(P))
-    return pixels[:, 0], pixels[:, 1], n_p, offset, P[2]
+class _Frames:
+    """The two frames of a reprojection and what every block of pixels reads."""
+
+    def __init__(self, current, previous, hist, cnt, tol, fetch, motion):
+        self.W = current.shape[1]
+        self.prev_shape = previous.shape
+        self.z = np.asarray(current.depth, dtype=np.float64).reshape(-1)
+        self.zp = np.asarray(previous.depth, dtype=np.float64).reshape(-1)
+        self.normal = np.asarray(current.normal, dtype=np.float64).reshape(-1, 3)
+        self.hist, self.cnt = hist.reshape(-1), cnt.reshape(-1)
+        self.tol, self.fetch, self.motion = tol, fetch, motion
+        if motion is None:
+            Rc, tc = current.view_transform
+            Rp, tp = previous.view_transform
+            # current view -> world -> previous view: p_prev = Rp Rc^T (p_cur - tc) + tp
+            self.M = Rp @ Rc.T
+            self.t = tp - self.M @ tc
+            self.cur_rays = _ray_tables(current.camera)
+            self.prev_rays = _ray_tables(previous.camera)
+            self.prev_camera = previous.camera
+
+    def block(self, idx):
+        """(px, py, weighted history sum, weight sum, smallest count) of the pixels ``idx``."""
+        i_c, j_c = np.divmod(idx, self.W)
+        z_c = self.z[idx]
+        zp = self.zp
+        if self.motion is not None:
+            m = self.motion[idx]
+            px, py = j_c + 0.5 + m[:, 0], i_c + 0.5 + m[:, 1]
+            limit = self.tol * z_c
+
+            def passes(flat, iq, jq):
+                return np.abs(zp[flat] - z_c) <= limit
+        else:
+            M, t = self.M, self.t
+            ax, bx, ay, by = self.cur_rays
+            X = ax[j_c] + bx[j_c] * z_c
+            Y = ay[i_c] + by[i_c] * z_c
+            P = [M[r, 0] * X + M[r, 1] * Y + M[r, 2] * z_c + t[r] for r in range(3)]
+            n = self.normal[idx]
+            n_p = [n @ M[r] for r in range(3)]
+            offset = n_p[0] * P[0] + n_p[1] * P[1] + n_p[2] * P[2]
+            pixels, _ = self.prev_camera.project(np.column_stack(P))
+            px, py = pixels[:, 0], pixels[:, 1]
+            limit = self.tol * np.abs(P[2])
+            ax, bx, ay, by = self.prev_rays
+
+            def passes(flat, iq, jq):
+                # the tap's surface point along its pixel ray, against the current point's tangent plane
+                zq = zp[flat]
+                d = n_p[0] * (ax[jq] + bx[jq] * zq) + n_p[1] * (ay[iq] + by[iq] * zq) + n_p[2] * zq
+                return np.abs(d - offset) <= limit
+
+        k = len(idx)
+        value_sum = np.zeros(k)
+        weight = np.zeros(k)
+        low = np.full(k, np.iinfo(np.int32).max, dtype=np.int64)
+        Wp = self.prev_shape[1]
+        with np.errstate(invalid="ignore", over="ignore"):
+            for iq, jq, w, inside in _taps(px, py, self.prev_shape, self.fetch):
+                flat = iq * Wp + jq
+                h = self.hist[flat]
+                ok = inside & np.isfinite(h) & passes(flat, iq, jq)
+                w_ok = ok if w is None else w * ok
+                value_sum += w_ok * np.where(ok, h, 0.0)
+                weight += w_ok
+                np.minimum(low, np.where(ok, self.cnt[flat], low), out=low)
+        return px, py, value_sum, weight, low
 
 
 def reproject(history, current, previous, *, count=None, fetch: str = "bilinear",
@@ -244,59 +264,29 @@ def reproject(history, current, previous, *, count=None, fetch: str = "bilinear"
     if motion is None:
         motion = current.motion
     valid = current.valid
-    zp_img = np.asarray(previous.depth, dtype=np.float64)
     if motion is None and _same_view(current, previous):
         return _in_place(hist, cnt, current, previous, tol)
     H, W = current.shape
-    Hp, Wp = previous.shape
-    idx = np.flatnonzero(valid)
-    i_c, j_c = np.divmod(idx, W)
-    z_c = np.asarray(current.depth, dtype=np.float64).reshape(-1)[idx]
-    zp_flat = zp_img.reshape(-1)
     if motion is not None:
-        m = np.asarray(motion, dtype=np.float64)
-        if m.shape != current.shape + (2,):
-            raise ValueError(f"motion must have shape {current.shape + (2,)}, got {m.shape}")
-        m = m.reshape(-1, 2)[idx]
-        px, py = j_c + 0.5 + m[:, 0], i_c + 0.5 + m[:, 1]
-
-        def passes(flat, iq, jq):
-            return np.abs(zp_flat[flat] - z_c) <= tol * z_c
-    else:
-        px, py, n_p, offset, z_p = _from_views(current, previous, i_c, j_c, z_c, idx)
-        ax, bx, ay, by = _ray_tables(previous.camera)
-        limit = tol * np.abs(z_p)
-
-        def passes(flat, iq, jq):
-            # the tap's surface point along its pixel ray, against the current point's tangent plane
-            zq = zp_flat[flat]
-            d = n_p[0] * (ax[jq] + bx[jq] * zq) + n_p[1] * (ay[iq] + by[iq] * zq) + n_p[2] * zq
-            return np.abs(d - offset) <= limit
-
-    hist_flat = hist.reshape(-1)
-    cnt_flat = cnt.reshape(-1)
-    k = len(idx)
-    value_sum = np.zeros(k)
-    weight = np.zeros(k)
-    low = np.full(k, np.iinfo(np.int32).max, dtype=np.int64)
-    with np.errstate(invalid="ignore", over="ignore"):
-        for iq, jq, w, inside in _taps(px, py, (Hp, Wp), fetch):
-            flat = iq * Wp + jq
-            h = hist_flat[flat]
-            ok = inside & np.isfinite(h) & passes(flat, iq, jq)
-            w_ok = ok if w is None else w * ok
-            value_sum += w_ok * np.where(ok, h, 0.0)
-            weight += w_ok
-            np.minimum(low, np.where(ok, cnt_flat[flat], low), out=low)
-    hit = weight > 0
+        motion = np.asarray(motion, dtype=np.float64)
+        if motion.shape != current.shape + (2,):
+            raise ValueError(f"motion must have shape {current.shape + (2,)}, got {motion.shape}")
+        motion = motion.reshape(-1, 2)
     found = np.zeros(H * W, bool)
-    found[idx] = hit
     value = np.full(H * W, np.nan)
-    value[idx[hit]] = value_sum[hit] / weight[hit]
     count_out = np.zeros(H * W, np.int32)
-    count_out[idx[hit]] = low[hit]
     source = np.full((H * W, 2), np.nan)
-    source[idx, 0], source[idx, 1] = px, py
+    frame = _Frames(current, previous, hist, cnt, tol, fetch, motion)
+    all_idx = np.flatnonzero(valid)
+    # blocks of pixels: the temporaries stay a few MB whatever the image size
+    for start in range(0, len(all_idx), CHUNK_PIXELS):
+        idx = all_idx[start:start + CHUNK_PIXELS]
+        px, py, v, w, low = frame.block(idx)
+        hit = w > 0
+        found[idx] = hit
+        value[idx[hit]] = v[hit] / w[hit]
+        count_out[idx[hit]] = low[hit]
+        source[idx, 0], source[idx, 1] = px, py
     found, value, count_out = found.reshape(H, W), value.reshape(H, W), count_out.reshape(H, W)
     source = source.reshape(H, W, 2)
     return Reprojection(value=value, count=count_out, found=found, source=source, covered=np.array(valid))
