@@ -9,16 +9,18 @@ and blends:
 - ``mean``: the running mean, weight 1 / n for the n-th frame behind a pixel (with a static
   camera, exactly the mean of the frames);
 - ``ema:ALPHA``: an exponential moving average, weight max(ALPHA, 1 / n) (the running mean until
-  1 / n falls to ALPHA, so a restarted pixel converges as fast as the mean at first: Schied et
-  al. 2017, Sec. 4.1, use the same rule for their integrated colour);
+  1 / n falls to ALPHA, so that a restarted pixel converges as fast as the mean at first: the
+  rule of the temporal pass of SVGF's reference code, Schied et al. 2017,
+  ``max(gAlpha, 1.0 / historyLength)`` with ``gAlpha = 0.2``, read in public copies of that
+  shader, not in the paper's text);
 - ``clip:ALPHA``: the moving average with the history first clipped to the new frame's 3 x 3
   mean +- ``gamma`` standard deviations (variance clipping, Salvi 2016, "An excursion in
-  temporal supersampling", GDC; for one channel the clip of the history towards the box is
-  a clamp to that interval).
+  temporal supersampling", GDC talk, gamma = 1 there; for one channel the clip of the history
+  towards the box is a clamp to that interval).
 
 ``clamp=True`` clamps the history to the range (min, max) of the new frame's 3 x 3 neighbours
-first (the "neighbourhood clamp" of TAA; Karis 2014, "High quality temporal supersampling",
-SIGGRAPH course), in any mode.
+first (the neighbourhood clamp of temporal anti-aliasing, Karis 2014, "High quality temporal
+supersampling", SIGGRAPH course), in any mode. The two talks' texts were not re-read here.
 """
 
 from __future__ import annotations
