@@ -126,6 +126,8 @@ def test_orbit_measures_flicker(tmp_path):
         # change can be of either sign but never exceeds the raw change
         assert np.isfinite(row["flicker"]) and row["flicker_raw"] > 0
         assert row["flicker"] <= row["flicker_raw"]
+        # frames that change are perceptibly different to FLIP (0 only for identical frames)
+        assert 0 < row["flicker_flip"] <= 1
 
 
 def test_orbit_cameras_turn_about_the_target():

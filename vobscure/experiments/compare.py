@@ -535,8 +535,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
 
 def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness, layers, screen_samples, seed,
            cache, progress):
-    """Add ``flicker`` (estimate minus reference) and ``flicker_raw`` to every row: the same
-    configurations over an orbit of cameras, measured (not timed) by the sweep."""
+    """Add ``flicker`` (estimate minus reference), ``flicker_raw`` and ``flicker_flip`` (FLIP of
+    each frame against the previous one) to every row: the same configurations over an orbit of
+    cameras, measured (not timed) by the sweep."""
     from ..metrics import flicker
 
     cams = orbit_cameras(camera, frames)
@@ -556,6 +557,7 @@ def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness,
         f = flicker(np.stack(seq[key]), np.stack(refs[key]))
         row["flicker"] = float(f.value)
         row["flicker_raw"] = float(f.estimate_change)
+        row["flicker_flip"] = float(f.estimate_flip)     # FLIP of each frame against the one before
 
 
 def _thickness_trials(rows, images, refs, gb, *, normal_clamp, seed, repeats) -> list[dict]:
