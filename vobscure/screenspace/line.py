@@ -308,11 +308,28 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
         # Sec. 4.5: reflection about a random 2-D direction per pixel, 2 (s . v) v - s; one
         # texel of the tiled texture per chunk, so the reflected points are the same for
-        # every pixel of the chunk
-        points = pattern.points if v is None else 2.0 * (pattern.points @ v)[:, None] * v - pattern.points
+        # every pixel of the chunk (a large tile: a texel per pixel, points per pixel)
+        if v is None:
+            points = pattern.points
+        elif v.ndim == 1:
+            points = 2.0 * (pattern.points @ v)[:, None] * v - pattern.points
+        else:
+            points = _reflected(pattern.points, v)
         out[chunk] = _line_nearest(px, points=points, weights=pattern.weights, padded=padded,
                                    antipodal=antipodal, **options)
     return out.reshape(H, W)
+
+
+def _reflected(points: np.ndarray, v: np.ndarray):
+    """Yields, point by point, the (x, y) of ``points`` (n, 2) reflected per pixel about the
+    lines along the unit vectors ``v`` (k, 2): two (k,) arrays, 2 (s . v) v - s
+    (Loos & Sloan 2010, Sec. 4.5)."""
+    vx, vy = np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1])
+    for s_x, s_y in points:
+        dot2 = vx * s_x
+        dot2 += vy * s_y
+        dot2 *= 2.0
+        yield dot2 * vx - s_x, dot2 * vy - s_y
 
 
 def _exactly_antipodal(pattern) -> bool:
@@ -334,6 +351,10 @@ def _exactly_antipodal(pattern) -> bool:
 def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded,
                   antipodal=False, intervals=None):
     """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
+
+    ``points`` yields the pattern's (x, y), floats shared by the pixels or (k,) arrays, a
+    point per pixel (a large noise tile, :func:`_reflected`): the same operations then run
+    on arrays, and a point on or beyond the rim is dropped for the pixels where it is.
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
     the depth of the pixel its disk point falls in (the same occupancy test as
@@ -390,9 +411,21 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
         for (x, y), w in zip(points, weights):
             # Loos & Sloan 2010, Sec. 4.1: z_s = sqrt(1 - x^2 - y^2)
             z_s2 = 1.0 - x * x - y * y
-            if not z_s2 > 0.0:
-                continue        # a point on the rim has no chord
-            z_s = float(np.sqrt(z_s2))
+            rim = None          # per-pixel points: where the point has no chord
+            if np.ndim(z_s2) == 0:
+                if not z_s2 > 0.0:
+                    continue        # a point on the rim has no chord
+                z_s = float(np.sqrt(z_s2))
+            else:
+                chord = z_s2 > 0.0
+                if not chord.any():
+                    continue
+                if not chord.all():
+                    # weight 0 there, and a chord of 1 to keep the arithmetic finite
+                    rim = ~chord
+                    w = np.where(rim, 0.0, w)
+                    z_s2 = np.where(rim, 1.0, z_s2)
+                z_s = np.sqrt(z_s2)
             # the pixel the disk point p + R (x, y, 0) falls in
             np.multiply(r_x, x, out=dj)
             np.rint(dj, out=dj)
@@ -414,6 +447,8 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 else:
                     d -= z
                     d *= 1.0 / radius
+                if rim is not None:
+                    d[rim] = 0.0        # finite, so that its weight 0 gives 0
             if normal_clamp:
                 # Sec. 4.4: the chord ends where the tangent plane crosses it, in t
                 np.multiply(gx, dj, out=t)
@@ -459,20 +494,33 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                     occ_hi = (raw + thickness - z) / radius
                 unocc, total = line_integral(-z_s, hi, d, occ_hi, z_s, falloff)
             # footnote 5: the chord's weight w over its full integral N = int_{-z_s}^{z_s} rho
-            scale = w / float(falloff_integral(-z_s, z_s, z_s, falloff=falloff))
+            full = falloff_integral(-z_s, z_s, z_s, falloff=falloff)
+            scale = w / (float(full) if np.ndim(full) == 0 else full)
+            if rim is not None:
+                unocc, total = np.where(rim, 0.0, unocc), np.where(rim, 0.0, total)
             num += scale * unocc
             den += scale * np.broadcast_to(total, (k,))
     if simple and not normal_clamp:
+        if np.ndim(wsum):
+            return _ratio(num + const, wsum)
         return np.clip((num + const) / wsum, 0.0, 1.0) if wsum > 0 else np.ones(k)
     if simple:
         num += const
         if den is None:        # antipodal: the pairs' plane terms cancelled
+            if np.ndim(const):
+                return _ratio(num, const)
             return np.clip(num / const, 0.0, 1.0) if const > 0 else np.ones(k)
         den += const
     # clamped, den is the half-ball's share seen by the samples (0: the whole ball lies
     # behind the tangent plane, nothing to occlude)
     vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
     return np.clip(vis, 0.0, 1.0)
+
+
+def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """num / den clipped to [0, 1], 1 where den is not > 0 (no chord, or nothing to see)."""
+    ok = den > 0
+    return np.where(ok, np.clip(num / np.where(ok, den, 1.0), 0.0, 1.0), 1.0)
 
 
 def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, offscreen, texture):
