@@ -306,30 +306,18 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     antipodal = _exactly_antipodal(pattern)
     for chunk, v in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
+        if v is not None and v.ndim == 2:
+            # a large tile: a texel per pixel, the reflection done per pixel in the kernel
+            out[chunk] = _line_nearest(px, points=pattern.points, weights=pattern.weights, padded=padded,
+                                       antipodal=antipodal, turn=v, **options)
+            continue
         # Sec. 4.5: reflection about a random 2-D direction per pixel, 2 (s . v) v - s; one
         # texel of the tiled texture per chunk, so the reflected points are the same for
-        # every pixel of the chunk (a large tile: a texel per pixel, points per pixel)
-        if v is None:
-            points = pattern.points
-        elif v.ndim == 1:
-            points = 2.0 * (pattern.points @ v)[:, None] * v - pattern.points
-        else:
-            points = _reflected(pattern.points, v)
+        # every pixel of the chunk
+        points = pattern.points if v is None else 2.0 * (pattern.points @ v)[:, None] * v - pattern.points
         out[chunk] = _line_nearest(px, points=points, weights=pattern.weights, padded=padded,
                                    antipodal=antipodal, **options)
     return out.reshape(H, W)
-
-
-def _reflected(points: np.ndarray, v: np.ndarray):
-    """Yields, point by point, the (x, y) of ``points`` (n, 2) reflected per pixel about the
-    lines along the unit vectors ``v`` (k, 2): two (k,) arrays, 2 (s . v) v - s
-    (Loos & Sloan 2010, Sec. 4.5)."""
-    vx, vy = np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1])
-    for s_x, s_y in points:
-        dot2 = vx * s_x
-        dot2 += vy * s_y
-        dot2 *= 2.0
-        yield dot2 * vx - s_x, dot2 * vy - s_y
 
 
 def _exactly_antipodal(pattern) -> bool:
@@ -349,12 +337,14 @@ def _exactly_antipodal(pattern) -> bool:
 
 
 def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded,
-                  antipodal=False, intervals=None):
+                  antipodal=False, intervals=None, turn=None):
     """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
 
-    ``points`` yields the pattern's (x, y), floats shared by the pixels or (k,) arrays, a
-    point per pixel (a large noise tile, :func:`_reflected`): the same operations then run
-    on arrays, and a point on or beyond the rim is dropped for the pixels where it is.
+    With ``turn`` (k, 2), unit vectors, one per pixel, each pixel reflects ``points`` about
+    the line along its own vector (Sec. 4.5), here in the tap offsets: the reflection
+    2 (s . v) v - s is the matrix [[c, s], [s, -c]] with c = 2 v_x^2 - 1 and s = 2 v_x v_y,
+    folded with the projected radius once per chunk. It keeps |s|, so the chord z_s (and
+    whether a point is on the rim) is the pattern point's, a scalar as for shared points.
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
     the depth of the pixel its disk point falls in (the same occupancy test as
@@ -405,31 +395,35 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
             def warp(depth):
                 return (depth - z) * inv_radius
     raw = np.empty(k) if thickness is not None else None
+    if turn is not None:
+        # Sec. 4.5, the per-pixel reflection times the projected radius: the tap offsets
+        # (dj, e) = (R_x x', R_y y') of the reflected point (x', y') = (c x + s y, s x - c y)
+        v_x, v_y = turn[:, 0], turn[:, 1]
+        c2 = 2.0 * v_x * v_x - 1.0          # cos and sin of twice the angle of v
+        s2 = 2.0 * v_x * v_y
+        j_x, j_y = r_x * c2, r_x * s2        # dj = j_x x + j_y y
+        e_x, e_y = r_y * s2, -r_y * c2       # e = e_x x + e_y y
     const = 0.0     # the scalar parts of num and den
     wsum = 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         for (x, y), w in zip(points, weights):
             # Loos & Sloan 2010, Sec. 4.1: z_s = sqrt(1 - x^2 - y^2)
             z_s2 = 1.0 - x * x - y * y
-            rim = None          # per-pixel points: where the point has no chord
-            if np.ndim(z_s2) == 0:
-                if not z_s2 > 0.0:
-                    continue        # a point on the rim has no chord
-                z_s = float(np.sqrt(z_s2))
-            else:
-                chord = z_s2 > 0.0
-                if not chord.any():
-                    continue
-                if not chord.all():
-                    # weight 0 there, and a chord of 1 to keep the arithmetic finite
-                    rim = ~chord
-                    w = np.where(rim, 0.0, w)
-                    z_s2 = np.where(rim, 1.0, z_s2)
-                z_s = np.sqrt(z_s2)
+            if not z_s2 > 0.0:
+                continue        # a point on the rim has no chord
+            z_s = float(np.sqrt(z_s2))
             # the pixel the disk point p + R (x, y, 0) falls in
-            np.multiply(r_x, x, out=dj)
+            if turn is None:
+                np.multiply(r_x, x, out=dj)
+                np.multiply(r_y, y, out=e)
+            else:
+                np.multiply(j_x, x, out=dj)
+                np.multiply(j_y, y, out=t)     # t: scratch until the tap is read
+                dj += t
+                np.multiply(e_x, x, out=e)
+                np.multiply(e_y, y, out=t)
+                e += t
             np.rint(dj, out=dj)
-            np.multiply(r_y, y, out=e)
             np.rint(e, out=e)
             if intervals is not None:
                 # the tapped pixel, whose intervals are read below (none: empty space)
@@ -447,8 +441,6 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 else:
                     d -= z
                     d *= 1.0 / radius
-                if rim is not None:
-                    d[rim] = 0.0        # finite, so that its weight 0 gives 0
             if normal_clamp:
                 # Sec. 4.4: the chord ends where the tangent plane crosses it, in t
                 np.multiply(gx, dj, out=t)
@@ -494,33 +486,20 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                     occ_hi = (raw + thickness - z) / radius
                 unocc, total = line_integral(-z_s, hi, d, occ_hi, z_s, falloff)
             # footnote 5: the chord's weight w over its full integral N = int_{-z_s}^{z_s} rho
-            full = falloff_integral(-z_s, z_s, z_s, falloff=falloff)
-            scale = w / (float(full) if np.ndim(full) == 0 else full)
-            if rim is not None:
-                unocc, total = np.where(rim, 0.0, unocc), np.where(rim, 0.0, total)
+            scale = w / float(falloff_integral(-z_s, z_s, z_s, falloff=falloff))
             num += scale * unocc
             den += scale * np.broadcast_to(total, (k,))
     if simple and not normal_clamp:
-        if np.ndim(wsum):
-            return _ratio(num + const, wsum)
         return np.clip((num + const) / wsum, 0.0, 1.0) if wsum > 0 else np.ones(k)
     if simple:
         num += const
         if den is None:        # antipodal: the pairs' plane terms cancelled
-            if np.ndim(const):
-                return _ratio(num, const)
             return np.clip(num / const, 0.0, 1.0) if const > 0 else np.ones(k)
         den += const
     # clamped, den is the half-ball's share seen by the samples (0: the whole ball lies
     # behind the tangent plane, nothing to occlude)
     vis = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
     return np.clip(vis, 0.0, 1.0)
-
-
-def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
-    """num / den clipped to [0, 1], 1 where den is not > 0 (no chord, or nothing to see)."""
-    ok = den > 0
-    return np.where(ok, np.clip(num / np.where(ok, den, 1.0), 0.0, 1.0), 1.0)
 
 
 def _line_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, offscreen, texture):
