@@ -152,3 +152,15 @@ def test_a_small_tile_read_per_pixel_agrees(monkeypatch, scene, gbuffers, name):
     valid = ~np.isnan(grouped)
     assert np.array_equal(valid, ~np.isnan(per_pixel))
     assert np.abs(per_pixel[valid] - grouped[valid]).max() <= LINE_TOL
+
+
+def test_gtao_frames_half_a_turn_apart_are_one_reflection(scene, gbuffers):
+    # vo_line reflects its pattern about the line along the texel's vector (Loos & Sloan 2010,
+    # Sec. 4.5), the same line for v and -v. The "gtao" schedule turns frame 3 by 240 degrees
+    # and frame 0 by 60, and dim-2 texels carry no step offset: one image within rounding.
+    # sao turns its spiral instead (a rotation, 360-degree periodic): two images.
+    gb, radius = gbuffers["perspective"], 0.1 * scene.extent
+    first, fourth = (vo.vo_line(gb, radius=radius, schedule="gtao", frame=f) for f in (0, 3))
+    valid = ~np.isnan(first)
+    assert np.abs(first[valid] - fourth[valid]).max() <= LINE_TOL
+    assert not np.allclose(*(vo.sao(gb, radius=radius, schedule="gtao", frame=f) for f in (0, 3)), equal_nan=True)
