@@ -342,9 +342,10 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
 
     With ``turn`` (k, 2), unit vectors, one per pixel, each pixel reflects ``points`` about
     the line along its own vector (Sec. 4.5), here in the tap offsets: the reflection
-    2 (s . v) v - s is the matrix [[c, s], [s, -c]] with c = 2 v_x^2 - 1 and s = 2 v_x v_y,
-    folded with the projected radius once per chunk. It keeps |s|, so the chord z_s (and
-    whether a point is on the rim) is the pattern point's, a scalar as for shared points.
+    2 (s . v) v - s is the matrix [[c, s], [s, -c]] with c = 2 v_x^2 - 1 and s = 2 v_x v_y
+    (cosine and sine of twice v's angle), folded with the projected radius once per chunk. It
+    keeps a point's length, so the chord z_s (and whether a point is on the rim) is the
+    pattern point's, a scalar as for shared points.
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
     the depth of the pixel its disk point falls in (the same occupancy test as
