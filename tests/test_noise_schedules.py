@@ -223,10 +223,12 @@ def test_every_randomized_screenspace_function_takes_frame_and_schedule():
 def test_estimators_change_with_the_frame(cornell, name, schedule):
     m = methods.get(name)
     run = lambda frame: m.run(cornell, 4, radius=0.5, frame=frame, schedule=schedule)
-    first, third = run(0), run(3)
-    assert np.array_equal(third, run(3), equal_nan=True)
-    assert not np.array_equal(first, third, equal_nan=True)
-    assert np.array_equal(np.isnan(first), np.isnan(third))
+    # frames 0 and 1: under "gtao" frames 0 and 3 turn the texels by 60 and 240 degrees, the
+    # same reflection for vo_line and vo_area (test_noise_tiles.py)
+    first, second = run(0), run(1)
+    assert np.array_equal(second, run(1), equal_nan=True)
+    assert not np.array_equal(first, second, equal_nan=True)
+    assert np.array_equal(np.isnan(first), np.isnan(second))
 
 
 def test_without_randomization_the_frame_is_unused(cornell):

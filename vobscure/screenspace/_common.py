@@ -435,18 +435,43 @@ def nearest_taps(px: Pixels, dj: np.ndarray, e: np.ndarray, *, offscreen: str, p
     return out
 
 
-def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None, *, chunk: int = None):
-    """Chunks of valid pixels that share one texel of the tiled noise texture.
+#: The most texels a noise texture may have for :func:`noise_classes` to group the pixels by
+#: texel. A group costs a fixed overhead (a pass over the image's rows and columns of its
+#: texel, a :func:`prepare`, a loop over the pattern), worth paying when groups are large: the
+#: default 4 x 4 tile of the ``"white"`` and ``"rotate"`` schedules (and tiles up to 8 x 8)
+#: are grouped; the 64 x 64 tiles of ``"r2"`` and ``"gtao"`` (4096 texels) are not, their
+#: pixels read their texel one by one (:func:`per_pixel_noise`).
+MAX_NOISE_CLASSES = 64
 
-    Yields ``(index, v)``: flat pixel indices and the texel's unit vector (None without
-    randomization, then the chunks are plain runs of valid pixels). Within a chunk every
-    pixel turns the pattern the same way, so the rotated pattern points are scalars and
-    only the per-pixel radius varies: the line estimator's inner loop then does no
-    per-pixel reflection at all.
+
+def per_pixel_noise(texture: np.ndarray | None) -> bool:
+    """True when :func:`noise_classes` yields per-pixel texels for ``texture``: it has more
+    than :data:`MAX_NOISE_CLASSES` texels (read at call time)."""
+    return texture is not None and texture.shape[0] * texture.shape[1] > MAX_NOISE_CLASSES
+
+
+def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None, *, chunk: int = None):
+    """Chunks of valid pixels with their texels of the tiled noise texture.
+
+    Yields ``(index, v)``: flat pixel indices and their texel. For a texture of at most
+    :data:`MAX_NOISE_CLASSES` texels a chunk's pixels share one texel and ``v`` is its unit
+    vector (dim,): every pixel turns the pattern the same way, so the rotated pattern points
+    are scalars and only the per-pixel radius varies (the line estimator's inner loop then
+    does no per-pixel reflection at all). For a larger texture (:func:`per_pixel_noise`) the
+    chunks are plain runs of valid pixels and ``v`` is (k, dim), each pixel's own texel
+    (:func:`noise_at`): grouping by texel would cost a group per texel. Without
+    randomization ``v`` is None and the chunks are plain runs of valid pixels.
     """
     chunk = CHUNK_PIXELS if chunk is None else chunk
     H, W = shape
     valid = (np.isfinite(depth64) & (depth64 > 0)).reshape(H, W)
+    if per_pixel_noise(texture):
+        size = texture.shape[0]
+        index = np.flatnonzero(valid)
+        for c in range(0, len(index), chunk):
+            i, j = np.divmod(index[c:c + chunk], W)
+            yield index[c:c + chunk], texture[i % size, j % size]
+        return
     if texture is None:
         index = np.flatnonzero(valid)
         for c in range(0, len(index), chunk):

@@ -306,6 +306,11 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     antipodal = _exactly_antipodal(pattern)
     for chunk, v in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
+        if v is not None and v.ndim == 2:
+            # a large tile: a texel per pixel, the reflection done per pixel in the kernel
+            out[chunk] = _line_nearest(px, points=pattern.points, weights=pattern.weights, padded=padded,
+                                       antipodal=antipodal, turn=v, **options)
+            continue
         # Sec. 4.5: reflection about a random 2-D direction per pixel, 2 (s . v) v - s; one
         # texel of the tiled texture per chunk, so the reflected points are the same for
         # every pixel of the chunk
@@ -332,8 +337,15 @@ def _exactly_antipodal(pattern) -> bool:
 
 
 def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded,
-                  antipodal=False, intervals=None):
+                  antipodal=False, intervals=None, turn=None):
     """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
+
+    With ``turn`` (k, 2), unit vectors, one per pixel, each pixel reflects ``points`` about
+    the line along its own vector (Sec. 4.5), here in the tap offsets: the reflection
+    2 (s . v) v - s is the matrix [[c, s], [s, -c]] with c = 2 v_x^2 - 1 and s = 2 v_x v_y
+    (cosine and sine of twice v's angle), folded with the projected radius once per chunk. It
+    keeps a point's length, so the chord z_s (and whether a point is on the rim) is the
+    pattern point's, a scalar as for shared points.
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
     the depth of the pixel its disk point falls in (the same occupancy test as
@@ -384,6 +396,14 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
             def warp(depth):
                 return (depth - z) * inv_radius
     raw = np.empty(k) if thickness is not None else None
+    if turn is not None:
+        # Sec. 4.5, the per-pixel reflection times the projected radius: the tap offsets
+        # (dj, e) = (R_x x', R_y y') of the reflected point (x', y') = (c x + s y, s x - c y)
+        v_x, v_y = turn[:, 0], turn[:, 1]
+        c2 = 2.0 * v_x * v_x - 1.0          # cos and sin of twice the angle of v
+        s2 = 2.0 * v_x * v_y
+        j_x, j_y = r_x * c2, r_x * s2        # dj = j_x x + j_y y
+        e_x, e_y = r_y * s2, -r_y * c2       # e = e_x x + e_y y
     const = 0.0     # the scalar parts of num and den
     wsum = 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -394,9 +414,17 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 continue        # a point on the rim has no chord
             z_s = float(np.sqrt(z_s2))
             # the pixel the disk point p + R (x, y, 0) falls in
-            np.multiply(r_x, x, out=dj)
+            if turn is None:
+                np.multiply(r_x, x, out=dj)
+                np.multiply(r_y, y, out=e)
+            else:
+                np.multiply(j_x, x, out=dj)
+                np.multiply(j_y, y, out=t)     # t: scratch until the tap is read
+                dj += t
+                np.multiply(e_x, x, out=e)
+                np.multiply(e_y, y, out=t)
+                e += t
             np.rint(dj, out=dj)
-            np.multiply(r_y, y, out=e)
             np.rint(e, out=e)
             if intervals is not None:
                 # the tapped pixel, whose intervals are read below (none: empty space)

@@ -59,7 +59,9 @@ def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offsc
     the tiled rotation texture: (cos phi u0 - sin phi w0, sin phi u0 + cos phi w0). Pixels
     are processed in groups that share one texel (:func:`~vobscure.screenspace._common.
     noise_classes`), so a group's rotated offsets are s scalars and only the projected
-    radius varies per pixel.
+    radius varies per pixel; with a large tile (``"r2"``, ``"gtao"``) each pixel's offsets
+    are turned by its own texel, by the same operations on arrays, so the two groupings give
+    the same values bit for bit.
 
     A tap moves to the centre of the pixel it falls in (off the image: to the nearest border
     pixel with ``offscreen="clamp"``), and Q is that pixel's view-space point (its depth on
@@ -80,7 +82,13 @@ def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offsc
     depth_nan = _background_as_nan(depth64)
     for chunk, rotation in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
-        cphi, sphi = (1.0, 0.0) if rotation is None else (float(rotation[0]), float(rotation[1]))
+        if rotation is None:
+            cphi, sphi = 1.0, 0.0
+        elif rotation.ndim == 1:
+            cphi, sphi = float(rotation[0]), float(rotation[1])
+        else:
+            # a texel per pixel (a large tile): the same operations on (k,) arrays
+            cphi, sphi = np.ascontiguousarray(rotation[:, 0]), np.ascontiguousarray(rotation[:, 1])
         k = len(chunk)
         centre_x, centre_y = px.col + 0.5, px.row + 0.5
         p = px.p
