@@ -148,7 +148,9 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
         n = px.n
         p = px.p
         ao = np.zeros(k)
-        nz = np.minimum(n[:, 2], -1e-12)   # facing the camera; grazing: a vertical tangent
+        # n . P, clamped to <= 0: a normal facing away from the eye is taken as edge-on
+        n_P = np.minimum(n[:, 0] * p[:, 0] + n[:, 1] * p[:, 1] + n[:, 2] * p[:, 2], 0.0)
+        n_z = np.minimum(n[:, 2], 0.0)
         for d in range(N_d):
             theta = 2.0 * np.pi * d / N_d + phi
             ct, st = np.cos(theta), np.sin(theta)
@@ -167,21 +169,33 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
                 ok = np.isfinite(depth) & ((x != px.center[:, 0]) | (y != px.center[:, 1]))
                 depth = np.where(ok, depth, px.z)
                 # the tap's view-space point S (the projection inverted), D = S - P
-                sx, sy = ray_to_xy(*ray_xy(x, y, px.fx, px.fy, px.cx, px.cy), depth, px.perspective)
+                a, b = ray_xy(x, y, px.fx, px.fy, px.cx, px.cy)
+                sx, sy = ray_to_xy(a, b, depth, px.perspective)
                 Dx, Dy, Dz = sx - p[:, 0], sy - p[:, 1], depth - px.z
                 r2 = Dx * Dx + Dy * Dy + Dz * Dz
                 ok &= (r2 < R2) & (r2 > 0)
                 # HBAO 2008: sin h(S_i) = -D_z / |D| (elevation towards the camera)
                 sin_h = -Dz / np.sqrt(np.where(ok, r2, 1.0))
-                # the tangent T = (u_x, u_y, T_z), n . T = 0, in the tap's own azimuth u (the
-                # snapped tap's, or perspective's, view-space direction; theta where D_xy = 0)
-                D_xy = np.sqrt(Dx * Dx + Dy * Dy)
-                flat = D_xy > 0
-                ux = np.where(flat, Dx / np.where(flat, D_xy, 1.0), ct)
-                uy = np.where(flat, Dy / np.where(flat, D_xy, 1.0), st)
-                T_z = -(n[:, 0] * ux + n[:, 1] * uy) / nz
-                # HBAO 2008: t = the tangent angle above the view plane, plus the angle bias
-                t = np.minimum(np.arctan(-T_z) + angle_bias, np.pi / 2)
+                # HBAO 2008: the tangent vector T = Q - P, Q where the tap's view ray meets
+                # the tangent plane (n, P), up to a positive factor, written without dividing
+                # by n . r or n_z so that it stays defined where they vanish. Perspective,
+                # ray r = (a, b, 1): Q = (n . P / n . r) r, T ~ (n . r) P - (n . P) r, the
+                # tangent's direction in the plane of the eye, P and the tap, on the tap's
+                # side. Orthographic, ray (a, b) + lambda z: T ~ (|n_z| D_xy, -n_xy . D_xy).
+                if px.perspective:
+                    n_r = n[:, 0] * a + n[:, 1] * b + n[:, 2]
+                    Tx = n_r * p[:, 0] - n_P * a
+                    Ty = n_r * p[:, 1] - n_P * b
+                    Tz = n_r * p[:, 2] - n_P
+                else:
+                    Tx, Ty = -n_z * Dx, -n_z * Dy
+                    Tz = n[:, 0] * Dx + n[:, 1] * Dy
+                T_xy = np.sqrt(Tx * Tx + Ty * Ty)
+                # a tap whose slice holds no tangent direction (T = 0) is skipped
+                ok &= (T_xy > 0) | (Tz != 0)
+                # HBAO 2008: t = atan(-T_z / |T_xy|), the tangent's elevation towards the
+                # camera, plus the angle bias
+                t = np.minimum(np.arctan2(-Tz, T_xy) + angle_bias, np.pi / 2)
                 e = sin_h - np.sin(t)
                 rise = ok & (e > e_prev)
                 # HBAO 2008: W(r) = 1 - r^2 / R^2 times the horizon's rise sin h(S_i) - sin h(S_{i-1})
