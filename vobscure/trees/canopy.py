@@ -74,21 +74,35 @@ def _cap_optical_depth(x: np.ndarray, m: np.ndarray) -> np.ndarray:
 
     ``m`` are the normals in the unit frame, of any non-zero length: with n = m / |m|,
     n.x = (m.x) / |m| and the in-plane distance d^2 = |x|^2 - (n.x)^2, so no unit normals
-    are formed (one pass fewer over three components)."""
+    are formed (one pass fewer over three components).
+
+    Far points are computed stably: each x is divided by s = max(1, max_i |x_i|) before the
+    squares are formed, and f = (h/s)^2 / ((d/s)^2 + (h/s)^2) is the same ratio, so d^2 never
+    overflows (s = 1, an exact division, for every point within a few radii of the shell)."""
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"points must be finite and not so far from the shell that their coordinates in its "
+                         f"unit frame overflow; {int(np.count_nonzero(~np.all(np.isfinite(x), axis=1)))} "
+                         f"point(s) do")
     mm = np.einsum("ij,ij->i", m, m)
     check_normal_lengths(mm)
+    s = np.max(np.abs(x), axis=1)
+    np.maximum(s, 1.0, out=s)
+    x = x / s[:, None]                                            # x / s, every coordinate in [-1, 1]
     n_dot_x = np.einsum("ij,ij->i", m, x)
-    n_dot_x /= np.sqrt(mm)                                        # n.(x - c), R = 1
+    n_dot_x /= np.sqrt(mm)                                        # n.(x - c) / s, R = 1
     d2 = np.einsum("ij,ij->i", x, x)
-    d2 -= n_dot_x * n_dot_x                                       # d^2, distance to the disk's centre
+    d2 -= n_dot_x * n_dot_x                                       # (d / s)^2, distance to the disk's centre
     np.maximum(d2, 0.0, out=d2)
+    n_dot_x *= s
     h = np.subtract(1.0, n_dot_x, out=n_dot_x)
     np.clip(h, 0.0, 2.0, out=h)                                   # h = R - n.(x - c), clamped to [0, 2R]
     h2 = h * h
     V_cap = np.pi / 3.0 * h2 * (3.0 - h)                          # Hegeman 2006, Eq. 4 (R = 1)
+    h_s = h / s
+    h_s2 = h_s * h_s                                              # (h / s)^2
     den = d2
-    den += h2
-    f = np.divide(h2, den, out=np.ones_like(h2), where=den > 0)  # Hegeman 2006, Eq. 5 (f = 1 at h = d = 0)
+    den += h_s2
+    f = np.divide(h_s2, den, out=np.ones_like(h2), where=den > 0)  # Hegeman 2006, Eq. 5 (f = 1 at h = d = 0)
     V_cap *= f
     return V_cap
 
@@ -325,6 +339,15 @@ def _fit_weights(weights, like: np.ndarray) -> np.ndarray:
     return w
 
 
+def _check_reference_range(v: np.ndarray) -> None:
+    """A reference is a visibility: values outside [0, 1] (NaN aside) are an error, since no
+    density fits them and the least squares would run off to an extreme one."""
+    bad = (v < 0.0) | (v > 1.0)
+    if np.any(bad):
+        raise ValueError(f"reference must be visibilities in [0, 1] (NaN entries are ignored); "
+                         f"{int(np.count_nonzero(bad))} value(s) lie outside, e.g. {float(v[bad][0])!r}")
+
+
 def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     r"""The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
 
@@ -333,8 +356,8 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     points, normals, shell
         As in ``canopy_visibility``.
     reference : (n,) float
-        The reference visibility at each point (a ray-traced AO, say). NaN entries are
-        ignored; inf is rejected.
+        The reference visibility at each point (a ray-traced AO, say), in [0, 1]. NaN
+        entries are ignored; inf and values outside [0, 1] are rejected.
     weights : (n,) float or None, keyword-only
         Non-negative weights of the squared residuals (1 each by default); e.g. 1/stderr^2.
 
@@ -347,8 +370,8 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     Raises
     ------
     ValueError
-        Shapes that disagree, inf in ``reference``, negative or non-finite ``weights``, or
-        nothing to fit (no point with a finite reference, a positive weight and tau > 0).
+        Shapes that disagree, inf in ``reference`` or values outside [0, 1], negative or
+        non-finite ``weights``, or nothing to fit (no point with a finite reference, a positive weight and tau > 0).
 
     Notes
     -----
@@ -381,6 +404,7 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     v = as_array(reference, "reference", shape=(tau.shape[0],), finite=False)
     if np.any(np.isinf(v)):
         raise ValueError("reference must not hold inf (NaN entries are ignored)")
+    _check_reference_range(v)
     w = _fit_weights(weights, tau)
     use = np.isfinite(v) & (w > 0) & (tau > 0)
     if not np.any(use):
@@ -445,8 +469,8 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     Raises
     ------
     ValueError
-        Shapes that disagree, NaN or inf in ``reference`` or ``weights``, negative
-        ``weights``, or a ``shell`` of another type.
+        Shapes that disagree, NaN or inf in ``reference`` or ``weights``, ``reference``
+        values outside [0, 1], negative ``weights``, or a ``shell`` of another type.
 
     Notes
     -----
@@ -471,6 +495,7 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     _check_shell(shell)
     P = as_array(as_raw_points(points, "points"), "points")
     ref = as_array(reference, "reference", shape=(P.shape[0],))
+    _check_reference_range(ref)
     w = _fit_weights(weights, ref)
 
     def loss(log_k):
