@@ -460,7 +460,10 @@ def sphere_set(scene, k: int, *, seed=0, meshes=None, samples: int = 20000) -> S
     """
     scene = as_scene(scene)
     k = check_int(k, "k")
-    samples = check_int(samples, "samples", minimum=k)
+    samples = check_int(samples, "samples")
+    if k > samples:
+        raise ValueError(f"k = {k} spheres need at least k interior points to cluster, but samples = {samples}; "
+                         f"pass a smaller k or samples >= k")
     rng = as_rng(seed)
     triangles, face_normals, chosen = _selected(scene, meshes)
     tracer = Tracer(triangles, face_normals=face_normals, threads=1)
