@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 from tqdm.auto import tqdm
 
-from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
+from ._validate import as_points, as_rng, as_unit_vectors, check_bool, check_choice, check_int, check_positive
 from .estimate import DEFAULT_GROUPS, Estimate
 from .raytrace import CHUNK_RAYS, Hits, parallel_map
 from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base, to_world,
@@ -81,6 +81,7 @@ def _chunked(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress
     unoccluded directions for bent normals). ``per_group`` is the number of samples behind
     one group mean (default m; 2 m for the antithetic ball samples).
     """
+    progress = check_bool(progress, "progress")
     base = sobol_base(dim, m, rng)
     shifts = rng.random((n, g, dim))
     per_chunk = max(1, CHUNK_RAYS * 2 // (g * m))
@@ -340,11 +341,12 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
     check_choice(weighting, "weighting", _WARPS)
     max_distance = check_positive(max_distance, "max_distance", allow_inf=True)
     bounces, albedo = _check_bounces(bounces, albedo)
+    bent_normals = check_bool(bent_normals, "bent_normals")
     if bounces and bent_normals:
         raise ValueError("bent_normals is not available with bounces > 0: the bent normal is a property of "
                          "the black-occluder visibility; compute it in a call with bounces=0")
     return _ao(scene, points, normals, normals, rays=rays, weighting=weighting,
-               max_distance=max_distance, seed=seed, bent_normals=bool(bent_normals),
+               max_distance=max_distance, seed=seed, bent_normals=bent_normals,
                groups=groups, threads=threads, progress=progress, bounces=bounces, albedo=albedo)
 
 
@@ -605,8 +607,8 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
     """
     scene = as_scene(scene)
     points = as_points(points, "points")
-    if not isinstance(normal_clamp, (bool, np.bool_)):
-        raise ValueError(f"normal_clamp must be True or False, got {normal_clamp!r}")
+    normal_clamp = check_bool(normal_clamp, "normal_clamp")
+    allow_open = check_bool(allow_open, "allow_open")
     if normal_clamp and normals is None:
         raise ValueError("normal_clamp=True needs normals: pass normals (n, 3), the side of each "
                          "point's half-ball, or normal_clamp=False for the whole ball")
@@ -708,6 +710,9 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     if not isinstance(gbuffer, GBuffer):
         raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
     check_choice(quantity, "quantity", QUANTITIES)
+    normal_clamp = check_bool(normal_clamp, "normal_clamp")
+    allow_open = check_bool(allow_open, "allow_open")
+    check_bool(progress, "progress")
     if radius is not None:
         radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
     elif quantity != "ao":

@@ -32,7 +32,7 @@ import weakref
 import numpy as np
 import trimesh
 
-from .._validate import as_array, as_points, as_unit_vectors, check_choice, check_int, check_positive
+from .._validate import as_array, as_points, as_unit_vectors, check_bool, check_choice, check_int, check_positive
 from ..scenes import Scene, as_scene
 
 __all__ = ["TERMS", "DEFAULT_TERM", "bunnell", "bunnell_gbuffer", "disk_shadow", "shadow_evaluations",
@@ -374,8 +374,7 @@ def shadow_evaluations(scene, points=None, normals=None, *, hierarchy: bool = Tr
     >>> shadow_evaluations(sphere) < len(sphere.vertices) ** 2
     True
     """
-    if not isinstance(hierarchy, (bool, np.bool_)):
-        raise ValueError(f"hierarchy must be True or False, got {hierarchy!r}")
+    hierarchy = check_bool(hierarchy, "hierarchy")
     open_ratio = check_positive(open_ratio, "open_ratio", allow_inf=True)
     scene = as_scene(scene)
     p_E, n_E, A = vertex_disks(scene, max_edge=max_edge)
@@ -401,9 +400,7 @@ def _options(passes, term, average, hierarchy, block, open_ratio) -> tuple:
     """Validated (passes, term, average, hierarchy, block, open_ratio)."""
     passes = check_int(passes, "passes", minimum=1)
     term = check_choice(term, "term", TERMS)
-    for name, value in (("average", average), ("hierarchy", hierarchy)):
-        if not isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"{name} must be True or False, got {value!r}")
+    average, hierarchy = check_bool(average, "average"), check_bool(hierarchy, "hierarchy")
     if average and passes < 2:
         raise ValueError("average needs passes >= 2 (it is the mean of the last two passes)")
     block = check_int(block, "block", minimum=1)

@@ -37,7 +37,7 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 from scipy.spatial import cKDTree
 
-from .._validate import as_array, as_points, as_rng, as_unit_vectors, check_choice, check_int
+from .._validate import as_array, as_points, as_rng, as_unit_vectors, check_bool, check_choice, check_int
 from ..estimate import DEFAULT_GROUPS, Estimate
 from ..raytrace import Tracer
 from ..sampling import shifted_hemisphere_directions, sobol_base
@@ -180,6 +180,7 @@ def sphere_set_ao(points, normals, centers, radii, *, order: int = 4, method: st
     check_choice(exp, "exp", sh.EXP_METHODS)
     check_choice(weighting, "weighting", ("cosine", "uniform"))
     chunk = check_int(chunk, "chunk")
+    clip = check_bool(clip, "clip")
     n2 = order * order
     kernel = _kernel_zonal(weighting, order)
     G = sh.triple_product_tensor(order) if method == "product" else None
