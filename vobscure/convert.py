@@ -379,8 +379,8 @@ def _normals_in_bands(nrm, camera, depth, covered, dtype, *, normal_space, encod
         worst = max(worst, diff)
     k = int(missing_all.sum())
     if k and not repair:
-        raise ValueError(f"normal has {k} vector(s) with no direction on covered pixels (finite depth): "
-                         f"{zero} of length <= {NORMAL_ZERO_TOL:g} and {k - zero} with a NaN or inf component; "
+        raise ValueError(f"normal has {k} zero or NaN vector(s) on covered pixels (finite depth): "
+                         f"{zero} of length <= {NORMAL_ZERO_TOL:g}, {k - zero} with a NaN or inf component; "
                          "mark those pixels background, or pass repair_normals=True to derive "
                          "their normals from the depth")
     if counts["renormalized"]:
