@@ -110,15 +110,17 @@ def _cap_optical_depth(x: np.ndarray, m: np.ndarray) -> np.ndarray:
 def _shell_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.ndarray:
     """f * V_cap in world volume (the unit frame's times ``volume_scale``), float64 (m,)."""
     if isinstance(shell, Sphere):
-        x = shell.to_unit(points)
+        with np.errstate(over="ignore"):             # an overflow is reported by _cap_optical_depth
+            x = shell.to_unit(points)
         m = np.asarray(normals, dtype=np.float64)    # a sphere's map keeps directions
     else:
         # the ellipsoid's map x -> diag(radii)^-1 Q^T (x - c) and, for normals, its inverse
         # transpose n -> diag(radii) Q^T n (Sec. 3), each as one (3, 3) product; the normals'
         # lengths are left to _cap_optical_depth
         A = shell.rotation / shell.radii
-        x = np.asarray(points, dtype=np.float64) @ A
-        x -= shell.center @ A
+        with np.errstate(over="ignore", invalid="ignore"):   # non-finite results are reported below
+            x = np.asarray(points, dtype=np.float64) @ A
+            x -= shell.center @ A
         if not np.all(np.isfinite(x)):
             raise ValueError(f"points must be finite; they hold {int(np.count_nonzero(~np.isfinite(x)))} NaN "
                              f"or inf value(s)")

@@ -210,7 +210,7 @@ class Ellipsoid(_UnitBallImage):
         if np.any(radii <= 0):
             raise ValueError(f"radii must be three positive numbers (a degenerate ellipsoid has a zero "
                              f"semi-axis), got {radii.tolist()}")
-        _check_volume(radii[0] * radii[1] * radii[2], "radii", radii.tolist())
+        _check_volume(float(radii[0]) * float(radii[1]) * float(radii[2]), "radii", radii.tolist())
         if self.rotation is None:
             rotation = np.eye(3)
         else:
