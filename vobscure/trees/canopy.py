@@ -60,6 +60,12 @@ K_XATOL = 1e-6
 
 
 # ----------------------------------------------------------------------------- validation
+#: How far outside [0, 1] a reference given to the fits may stray: a noisy reference (a
+#: Monte Carlo estimate, a reference with measurement noise of a few hundredths) does, and
+#: still fits correctly; further out the values are not visibilities (all -1, say).
+REFERENCE_SLACK = 0.1
+
+
 def _check_shell(shell, name: str = "shell", *, multi: bool = True):
     kinds = (Sphere, Ellipsoid, MultiShell) if multi else (Sphere, Ellipsoid)
     if not isinstance(shell, kinds):
@@ -342,12 +348,14 @@ def _fit_weights(weights, like: np.ndarray) -> np.ndarray:
 
 
 def _check_reference_range(v: np.ndarray) -> None:
-    """A reference is a visibility: values outside [0, 1] (NaN aside) are an error, since no
-    density fits them and the least squares would run off to an extreme one."""
-    bad = (v < 0.0) | (v > 1.0)
+    """A reference is a visibility: values further than :data:`REFERENCE_SLACK` outside
+    [0, 1] (NaN aside) are an error, since no density fits them and the least squares would
+    run off to an extreme one."""
+    bad = (v < -REFERENCE_SLACK) | (v > 1.0 + REFERENCE_SLACK)
     if np.any(bad):
-        raise ValueError(f"reference must be visibilities in [0, 1] (NaN entries are ignored); "
-                         f"{int(np.count_nonzero(bad))} value(s) lie outside, e.g. {float(v[bad][0])!r}")
+        raise ValueError(f"reference must be visibilities in [0, 1] (within {REFERENCE_SLACK} for noise; NaN "
+                         f"entries are ignored); {int(np.count_nonzero(bad))} value(s) lie outside, e.g. "
+                         f"{float(v[bad][0])!r}")
 
 
 def fit_density(points, normals, shell, reference, *, weights=None) -> float:
@@ -359,7 +367,8 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
         As in ``canopy_visibility``.
     reference : (n,) float
         The reference visibility at each point (a ray-traced AO, say), in [0, 1]. NaN
-        entries are ignored; inf and values outside [0, 1] are rejected.
+        entries are ignored; inf and values further than ``REFERENCE_SLACK`` outside
+        [0, 1] are rejected.
     weights : (n,) float or None, keyword-only
         Non-negative weights of the squared residuals (1 each by default); e.g. 1/stderr^2.
 
@@ -372,7 +381,8 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     Raises
     ------
     ValueError
-        Shapes that disagree, inf in ``reference`` or values outside [0, 1], negative or
+        Shapes that disagree, inf in ``reference`` or values outside [0, 1] by more than
+        ``REFERENCE_SLACK``, negative or
         non-finite ``weights``, or nothing to fit (no point with a finite reference, a positive weight and tau > 0).
 
     Notes
@@ -472,7 +482,8 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     ------
     ValueError
         Shapes that disagree, NaN or inf in ``reference`` or ``weights``, ``reference``
-        values outside [0, 1], negative ``weights``, or a ``shell`` of another type.
+        values outside [0, 1] by more than ``REFERENCE_SLACK``, negative ``weights``, or a
+        ``shell`` of another type.
 
     Notes
     -----
