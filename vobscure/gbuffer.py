@@ -511,9 +511,35 @@ class GBuffer:
         return n
 
     def astype(self, dtype) -> "GBuffer":
-        """The same G-buffer whose float images are of ``dtype`` (e.g. float32 for precision tests)."""
+        """The same G-buffer whose float images are of ``dtype`` (e.g. float32 for precision tests).
+
+        Raises
+        ------
+        ValueError
+            If ``dtype`` is not a float dtype, or a covered pixel's depth does not fit in it
+            (it would overflow to +inf, which marks background, or underflow to 0): the error
+            names the largest (smallest) depth and the dtype's range.
+        """
+        try:
+            target = np.dtype(dtype)
+        except TypeError:
+            target = None
+        if target is None or target.kind != "f":
+            raise ValueError(f"dtype must be a float dtype such as numpy.float32, got {dtype!r}")
+        depth = np.abs(np.asarray(self.depth, dtype=np.float64)[self.valid])
+        if depth.size and target.itemsize < 8:
+            info = np.finfo(target)
+            if depth.max() > info.max:
+                raise ValueError(f"astype({target}): the largest depth of a covered pixel, {depth.max():.6g}, exceeds "
+                                 f"{target}'s maximum {float(info.max):.6g} and would become inf (background); "
+                                 f"rescale the scene and camera, or keep float64")
+            tiny = depth[(depth > 0) & (depth < info.tiny)]
+            if tiny.size:
+                raise ValueError(f"astype({target}): the smallest depth of a covered pixel, {tiny.min():.6g}, is "
+                                 f"below {target}'s smallest normal number {float(info.tiny):.6g}; rescale the "
+                                 f"scene and camera, or keep float64")
         hits = None if self._hit_source is None else self.hits
-        return self._replace(hits=hits, dtype=dtype)
+        return self._replace(hits=hits, dtype=target)
 
     def inner(self) -> "GBuffer":
         """The G-buffer of the inner frame: this one without its guard band (itself when

@@ -163,6 +163,10 @@ def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_
     ((2, 3), (2, 3, 3), True)
     """
     depth_path, normal_path = _paths(path_or_paths, normal_path)
+    normal_channels = _check_normal_channels(normal_channels)
+    if depth_channel is not None and not (isinstance(depth_channel, str) and depth_channel):
+        raise ValueError(f"depth_channel must be a channel name (a non-empty string) or None, got {depth_channel!r}")
+    depth_scale = _check_depth_scale(depth_scale)
     found: dict = {}
     cache: dict = {}   # each file is opened once; .npz archives are closed below
     try:
@@ -180,6 +184,36 @@ def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_
         raise ValueError(f"the normals {found['normal']} are {normal.shape[1]}x{normal.shape[0]} pixels but "
                          f"the depth {found['depth']} is {depth.shape[1]}x{depth.shape[0]}; they must match")
     return depth, normal, found
+
+
+def _check_normal_channels(spec):
+    """None, a layer name (or "X,Y,Z"), or three channel names; anything else is an error."""
+    if spec is None or (isinstance(spec, str) and spec.strip()):
+        return spec
+    if not isinstance(spec, str):
+        try:
+            names = tuple(spec)
+        except TypeError:
+            names = None
+        if names is not None and len(names) == 3 and all(isinstance(n, str) and n for n in names):
+            return names
+    raise ValueError(f"normal_channels must be None (found automatically), a layer name such as 'Normal' or "
+                     f"'View Layer.Normal', or three channel names such as ('N.X', 'N.Y', 'N.Z') or "
+                     f"'N.X,N.Y,N.Z'; got {spec!r}")
+
+
+def _check_depth_scale(depth_scale):
+    """None or a finite number > 0 (a numeric string as on the command line is accepted)."""
+    if depth_scale is None:
+        return None
+    try:
+        value = float(depth_scale)
+    except (TypeError, ValueError):
+        value = None
+    if isinstance(depth_scale, bool) or value is None or not (np.isfinite(value) and value > 0):
+        raise ValueError(f"depth_scale must be a finite number > 0 (scene units per stored depth unit), "
+                         f"got {depth_scale!r}")
+    return value
 
 
 def _paths(path_or_paths, normal_path):
@@ -220,10 +254,7 @@ def _check_camera(camera, shape, source) -> None:
 
 def _read_depth(path, channel, depth_scale, found, cache) -> np.ndarray:
     suffix = path.suffix.lower()
-    if depth_scale is not None:
-        depth_scale = float(depth_scale)
-        if not (np.isfinite(depth_scale) and depth_scale > 0):
-            raise ValueError(f"depth_scale must be a finite number > 0, got {depth_scale!r}")
+    depth_scale = _check_depth_scale(depth_scale)
     if suffix == ".exr":
         channels = _exr_cached(path, cache)
         name = channel if channel is not None else _default_depth(channels, path)
@@ -492,7 +523,12 @@ def read_pfm(path) -> np.ndarray:
     m = _PFM_HEADER.match(data[:256])
     if m is None:
         raise ValueError(f"{path}: not a PFM file (expected a 'Pf' or 'PF' header, width, height and scale)")
-    magic, W, H, scale = m.group(1), int(m.group(2)), int(m.group(3)), float(m.group(4))
+    magic, W, H = m.group(1), int(m.group(2)), int(m.group(3))
+    try:
+        scale = float(m.group(4))
+    except ValueError:
+        raise ValueError(f"{path}: the PFM scale line must be a number (its sign gives the byte order), "
+                         f"got {m.group(4).decode('ascii', 'replace')!r}") from None
     if scale == 0 or not np.isfinite(scale):
         raise ValueError(f"{path}: the PFM scale must be a non-zero number, got {scale}")
     C = 3 if magic == b"PF" else 1
@@ -590,6 +626,9 @@ def write_image(path, visibility, *, background=None, bits=8, channel="Y") -> Pa
         raise ValueError(f"visibility must be an (H, W) image, got shape {v.shape}")
     if v.dtype.kind not in "fiu":
         raise ValueError(f"visibility must be numbers, got dtype {v.dtype}")
+    if v.size == 0:
+        raise ValueError(f"visibility is an empty {v.shape[0]} x {v.shape[1]} image; an image file needs at "
+                         f"least one pixel")
     suffix = path.suffix.lower()
     if suffix != ".png" and background is not None:
         raise ValueError(f"background is a PNG colour; {suffix} files keep NaN on background")

@@ -41,7 +41,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from .._validate import check_choice, check_int, check_positive
+from .._validate import check_bool, check_choice, check_int, check_positive
 from ..camera.kernel import ray_to_xy, ray_xy
 from ..estimate import Estimate
 from ..gbuffer import GBuffer
@@ -284,6 +284,7 @@ def noise_texture(noise_size: int, seed, dim: int, randomize: bool, *, frame: in
     and ``schedule`` are checked either way; frame 0 of ``"white"`` is the single-frame
     texture: ``as_rng(seed).normal(size=(T, T, dim))`` normalized."""
     schedule, frame = check_schedule(schedule), check_frame(frame)
+    randomize = check_bool(randomize, "randomize")
     if not randomize:
         return None
     return schedule_texture(schedule, frame, seed=seed, noise_size=noise_size, dim=dim)

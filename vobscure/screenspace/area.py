@@ -475,6 +475,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     gb, depth64, index = C.frame(gbuffer, radius)
     radius = float(radius)
     pattern = C.as_pattern(samples, 2)
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     check_choice(model, "model", MODELS)
     if reconstruction is not None:
         warnings.warn("vo_area(reconstruction=...) is deprecated: use fetch=, the name of the depth fetch of "
@@ -493,7 +494,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     depth2 = depth64.reshape(H, W)
     finite = np.isfinite(depth2) & (depth2 > 0)
     pyramid = MomentPyramid.from_depth(depth2, finite, perspective=gb.camera.is_perspective, offscreen=offscreen,
-                                  prefilter=bool(prefilter), positions=normal_clamp)
+                                  prefilter=C.check_bool(prefilter, "prefilter"), positions=normal_clamp)
     # Step 2 (per sample): the regions' log2 areas are constants (Sec. 4.2)
     half_log_area = 0.5 * np.log2(region_areas(pattern))
     kernel = partial(_area_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,

@@ -230,7 +230,7 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
     texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
-    kernel = partial(_gtao_kernel, radius=radius, texture=texture, clip=bool(clip), **options)
+    kernel = partial(_gtao_kernel, radius=radius, texture=texture, clip=C.check_bool(clip, "clip"), **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
@@ -302,8 +302,7 @@ def _check(*, slices, steps, falloff_range, thin_occluder, power, normal_fudge, 
                    thin_occluder=C.check_positive(thin_occluder, "thin_occluder", allow_zero=True),
                    power=C.check_positive(power, "power"),
                    normal_fudge=_fraction(normal_fudge, "normal_fudge"), fetch=fetch, offscreen=offscreen)
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise ValueError(f"randomize must be True or False, got {randomize!r}")
+    C.check_bool(randomize, "randomize")
     if step_jitter not in STEP_JITTERS:
         raise ValueError(f"step_jitter must be one of {', '.join(STEP_JITTERS)}, got {step_jitter!r}")
     options["r1_jitter"] = step_jitter == "r1"

@@ -141,6 +141,7 @@ def hbao(gbuffer, *, radius: float, directions: int = 8, steps: int = 4, angle_b
         raise ValueError(f"angle_bias must be in [0, pi/2) radians, got {angle_bias!r}")
     check_choice(offscreen, "offscreen", C.OFFSCREEN)
     check_int(noise_size, "noise_size")
+    attenuation = C.check_bool(attenuation, "attenuation")
     texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     R2 = radius * radius
     H, W = gb.depth.shape

@@ -279,6 +279,7 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     pattern = C.as_pattern(samples, 2)
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     intervals = C.solid_intervals(gbuffer, thickness)
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff,
                                thickness=None if intervals is not None else thickness, noise_size=noise_size)

@@ -342,6 +342,7 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
     >>> bool(np.array_equal(a, b, equal_nan=True))
     True
     """
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     intervals = C.solid_intervals(gbuffer, thickness)
     return _point_vo(gbuffer, radius=radius, pattern=C.as_pattern(samples, 3), normal_clamp=normal_clamp,
                      thickness=None if intervals is not None else thickness, falloff=falloff,
@@ -447,6 +448,7 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     >>> float(ref.value[4, 4]), float(ref.stderr[4, 4]), ref.samples
     (1.0, 0.0, 256)
     """
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     return _reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
                       thickness=thickness, falloff=falloff, seed=seed, fetch=fetch, offscreen=offscreen,
                       groups=groups, progress=progress, along="segment")

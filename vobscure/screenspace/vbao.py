@@ -208,8 +208,7 @@ def _check(gbuffer, *, radius, slices, steps, thickness, thickness_scale, thickn
         raise ValueError(f"sectors must be an integer in 1 .. {MAX_SECTORS}, got {sectors!r}")
     if weighting == "eevee" and sectors != 32:
         raise ValueError(f"sectors must be 32 with weighting='eevee' (Blender's weights), got {sectors!r}")
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise ValueError(f"randomize must be True or False, got {randomize!r}")
+    C.check_bool(randomize, "randomize")
     check_choice(step_jitter, "step_jitter", STEP_JITTERS)
     C.check_common(fetch=fetch, offscreen=offscreen, noise_size=noise_size)
     return dict(slices=C.check_int(slices, "slices"), steps=C.check_int(steps, "steps"), thickness=value,
