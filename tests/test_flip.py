@@ -242,3 +242,11 @@ def test_flicker_flip_pools_the_pairs_over_their_own_pixels():
     want = sum(p.mean * p.pixels for p in pair) / sum(p.pixels for p in pair)
     assert f.pairs == sum(p.pixels for p in pair)
     assert f.estimate_flip == pytest.approx(want, rel=1e-12)
+
+
+def test_flip_switch_must_be_a_bool():
+    img = np.full((8, 8), 0.5)
+    with pytest.raises(ValueError, match="flip"):
+        vo.metrics.error(img, img, flip="no")
+    with pytest.raises(ValueError, match="flip"):
+        vo.metrics.flicker(np.stack([img, img]), flip="no")

@@ -325,3 +325,5 @@ def test_update_errors(slab_gb):
         acc.update(np.zeros(slab_gb.shape), None)
     with pytest.raises(ValueError, match="denoise"):
         Accumulator(denoise="during")
+    with pytest.raises(ValueError, match="reproject"):
+        Accumulator(reproject="no")

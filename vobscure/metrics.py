@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ._validate import as_array, check_int, check_positive
+from ._validate import as_array, check_bool, check_int, check_positive
 
 __all__ = ["ErrorReport", "error", "FlipReport", "flip", "FLIP_PPD", "TermSummary", "Decomposition", "decompose",
            "Flicker", "flicker", "correlation", "calibration_rmse", "equal_error_rays", "thin_feature_mask",
@@ -129,6 +129,7 @@ def error(estimate, reference, *, mask=None, flip: bool = True) -> ErrorReport:
     >>> round(r.rmse, 6), round(r.bias, 6), r.pixels, r.ignored
     (0.1, 0.1, 63, 1)
     """
+    flip = check_bool(flip, "flip")
     est = as_array(estimate, "estimate", finite=False)
     ref = as_array(reference, "reference", finite=False)
     if est.shape != ref.shape:
@@ -594,6 +595,7 @@ def flicker(frames, reference_frames=None, *, mask=None, flip: bool = True) -> F
     >>> f.reference_flip, f.estimate_flip > 0
     (0.0, True)
     """
+    flip = check_bool(flip, "flip")
     V = _image(frames, "frames")
     if V.ndim < 2 or V.shape[0] < 2:
         raise ValueError(f"frames must be a sequence of at least 2 frames (T, H, W), got shape {V.shape}")

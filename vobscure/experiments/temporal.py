@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import methods as _methods
 from .. import references as _references
-from .._validate import check_choice, check_int, check_positive
+from .._validate import check_bool, check_choice, check_int, check_positive
 from ..temporal import AccumulateSpec, Accumulator, camera_path, parse_accumulate
 from .common import new_figure, progress_bar, save_figure
 from .verdict import POOR_RMSE, TARGET_FACTOR
@@ -93,7 +93,8 @@ def configurations(methods, *, schedules="white", accumulate="mean", clamp: bool
 
     if denoise is not None:
         check_choice(denoise, "denoise", DENOISE_STEPS)
-    return tuple(TemporalConfig(m, s, a, bool(clamp), bool(reproject), denoise)
+    clamp, reproject = check_bool(clamp, "clamp"), check_bool(reproject, "reproject")
+    return tuple(TemporalConfig(m, s, a, clamp, reproject, denoise)
                  for m, s, a in itertools.product(configs, scheds, accs))
 
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from .._validate import check_choice, check_positive
+from .._validate import check_bool, check_choice, check_positive
 from ..gbuffer import GBuffer
 from .reproject import DEPTH_TOLERANCE, REPROJECT_FETCHES, reproject
 
@@ -172,8 +172,8 @@ class Accumulator:
                  fetch: str = "bilinear", depth_tolerance: float = DEPTH_TOLERANCE,
                  gamma: float = VARIANCE_GAMMA, denoise=None, denoise_options=None):
         self.spec = parse_accumulate(accumulate)
-        self.clamp = bool(clamp)
-        self.reproject = bool(reproject)
+        self.clamp = check_bool(clamp, "clamp")
+        self.reproject = check_bool(reproject, "reproject")
         self.fetch = check_choice(fetch, "fetch", REPROJECT_FETCHES)
         self.depth_tolerance = check_positive(depth_tolerance, "depth_tolerance")
         self.gamma = check_positive(gamma, "gamma")
