@@ -201,3 +201,28 @@ def test_blue_schedule_definition():
     with pytest.raises(ValueError, match="seed"):
         noise.schedule_uniforms("blue", 3, seed=-2)
     assert noise.schedule_texture("blue", 2, dim=2).shape == (64, 64, 2)
+
+
+# Weyl's criterion: (u1, u2) over frames is equidistributed in the unit square iff every mean
+# of exp(2 pi i (h1 u1 + h2 u2)), h != 0, tends to 0. For u = b + n alpha the mean over
+# n < N is a geometric series: |mean| <= 1 / (N |sin(pi theta)|), theta = h1 alpha + h2 beta.
+# Checked for |h1|, |h2| <= 3 with the documented increments; one increment for both would
+# give |mean| = 1 at h = (1, -1).
+WEYL_FRAMES = 1000
+WEYL_H = 3
+ROUNDING = 1e-9     # float64 phases of up to ~4000 turns: ~1e-12 each, summed over 1000 frames
+
+
+def test_pairs_fill_the_unit_square():
+    alpha, beta = (np.sqrt(5.0) - 1.0) / 2.0, np.sqrt(2.0) - 1.0
+    u = np.stack([noise.schedule_uniforms("blue", f)[::8, ::8] for f in range(WEYL_FRAMES)])
+    worst = 0.0
+    for h1 in range(-WEYL_H, WEYL_H + 1):
+        for h2 in range(-WEYL_H, WEYL_H + 1):
+            if h1 == h2 == 0:
+                continue
+            mean = np.abs(np.exp(2j * np.pi * (h1 * u[..., 0] + h2 * u[..., 1])).mean(axis=0))
+            bound = 1.0 / (WEYL_FRAMES * abs(np.sin(np.pi * (h1 * alpha + h2 * beta))))
+            assert mean.max() <= bound + ROUNDING, (h1, h2, mean.max(), bound)
+            worst = max(worst, bound)
+    assert worst < 0.05      # the bounds say something: every such mean is below 5%
