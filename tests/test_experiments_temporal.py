@@ -119,7 +119,7 @@ def test_verdict_names_the_cheapest_that_reaches_the_target():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(schedules="blue"), "schedule"), (dict(accumulate="ema:2"), "alpha"), (dict(denoise="now"), "denoise"),
+    (dict(schedules="pink"), "schedule"), (dict(accumulate="ema:2"), "alpha"), (dict(denoise="now"), "denoise"),
 ])
 def test_configuration_errors(kwargs, match):
     with pytest.raises(ValueError, match=match):

@@ -62,7 +62,7 @@ def _routes(monkeypatch, f, gb, **kwargs):
 
 
 def test_which_tiles_are_read_per_pixel():
-    for schedule in ("r2", "gtao"):
+    for schedule in ("r2", "gtao", "blue"):
         assert C.per_pixel_noise(noise.schedule_texture(schedule, 0, dim=2))
     for schedule in ("white", "rotate"):
         for size in (1, noise.NOISE_SIZE, 8):

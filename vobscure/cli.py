@@ -124,7 +124,7 @@ def _parser() -> argparse.ArgumentParser:
     seq.add_argument("--cameras", type=Path, default=None, metavar="FILE",
                      help="a JSON list of camera records (Camera.to_dict) as the path, in place of --motion")
     seq.add_argument("--schedule", default="white", metavar="LIST",
-                     help="noise schedules per frame, comma-separated: white, rotate, r2, gtao (default white)")
+                     help="noise schedules per frame, comma-separated: white, rotate, r2, gtao, blue (default white)")
     seq.add_argument("--accumulate", default="mean", metavar="LIST",
                      help="accumulations, comma-separated: mean, ema:ALPHA, clip:ALPHA (default mean)")
     seq.add_argument("--clamp", action="store_true", help="clamp the history to the new frame's 3x3 range")

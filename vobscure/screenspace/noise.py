@@ -12,7 +12,10 @@ This module is the one place that defines the schedules (:data:`SCHEDULES`):
 - ``"rotate"``: frame 0's texture turned about the z axis by golden-ratio increments;
 - ``"r2"``: XeGTAO's spatio-temporal noise, the R2 sequence along a 64 x 64 Hilbert curve;
 - ``"gtao"``: the temporal rotations and step offsets of Jimenez et al. 2016 over the spatial
-  interleaved gradient noise, as Unity HDRP's GTAO runs them.
+  interleaved gradient noise, as Unity HDRP's GTAO runs them;
+- ``"blue"``: two 64 x 64 void-and-cluster blue-noise arrays (:mod:`.bluenoise`), u1 shifted
+  by the golden ratio and u2 by sqrt(2) - 1 per frame: spatial blue noise animated per frame,
+  not spatiotemporal blue noise.
 
 A texel carries two numbers in [0, 1), (u1, u2) (:func:`schedule_uniforms`). The estimators
 read them back from the unit vectors as follows, and :func:`uniforms_to_texture` is the exact
@@ -44,6 +47,11 @@ References
    component's C# (the temporal tables and their indices) and the GTAO HLSL's ``GetOffset``
    and ``GetDirection`` (read in copies of the public source; repository version not
    identified).
+.. [6] R. Ulichney, "The void-and-cluster method for dither array generation", Proc. SPIE
+   1913 (1993): the blue-noise arrays of the ``"blue"`` schedule.
+.. [7] A. Wolfe, N. Morrical, R. Ramamoorthi, "Spatiotemporal Blue Noise Masks", EGSR 2022
+   (authors as on https://research.nvidia.com/publication/2022-07_spatiotemporal-blue-noise-masks):
+   masks blue over time too, which ``"blue"`` is not.
 """
 
 from __future__ import annotations
@@ -51,18 +59,24 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_rng, check_choice, check_int
+from .bluenoise import BLUE_TILE, blue_ranks, ranks_to_uniforms
 
 __all__ = ["SCHEDULES", "NOISE_SIZE", "GOLDEN", "GTAO_ROTATIONS", "GTAO_OFFSETS", "R2_TILE", "GTAO_TILE",
+           "BLUE_TILE", "SILVER",
            "period", "check_frame", "check_schedule", "hilbert_index", "gtao_temporal",
            "schedule_uniforms", "uniforms_to_texture", "schedule_texture"]
 
 #: The noise schedules, in the order of the documentation.
-SCHEDULES = ("white", "rotate", "r2", "gtao")
+SCHEDULES = ("white", "rotate", "r2", "gtao", "blue")
 #: Default edge of the tiled random texture (pixels) of the ``"white"`` and ``"rotate"`` schedules.
 NOISE_SIZE = 4
 #: The golden-ratio increment of the ``"rotate"`` schedule, (sqrt(5) - 1) / 2: the turns
 #: n * GOLDEN mod 1 never repeat and are equidistributed in [0, 1) (Weyl).
 GOLDEN = 0.6180339887498949
+#: The ``"blue"`` schedule's per-frame increment of u2, sqrt(2) - 1: 1, GOLDEN and SILVER are
+#: linearly independent over the rationals, so a texel's pairs (u1, u2) over the frames are
+#: equidistributed in the unit square (Weyl); one increment for both would keep them on a line.
+SILVER = 0.41421356237309515
 #: Edge of the ``"r2"`` tile: XeGTAO's Hilbert curve of level 6 (``XE_HILBERT_LEVEL``).
 R2_TILE = 64
 _R2_LEVEL = 6
@@ -101,7 +115,7 @@ def period(schedule: str) -> int | None:
     Examples
     --------
     >>> [period(s) for s in SCHEDULES]
-    [None, None, 64, 24]
+    [None, None, 64, 24, None]
     """
     check_schedule(schedule)
     return {"r2": _R2_PERIOD, "gtao": len(GTAO_ROTATIONS) * len(GTAO_OFFSETS)}.get(schedule)
@@ -229,6 +243,13 @@ def _gtao_uniforms(frame: int) -> np.ndarray:
     return np.stack([u1, u2], axis=-1)
 
 
+def _blue_uniforms(frame: int) -> np.ndarray:
+    """The stored void-and-cluster arrays B1, B2 ((rank + 0.5) / 4096) on the 64 x 64 tile,
+    animated: u1 = frac(B1 + n GOLDEN), u2 = frac(B2 + n SILVER)."""
+    b = ranks_to_uniforms(blue_ranks()[..., 0]), ranks_to_uniforms(blue_ranks()[..., 1])
+    return np.stack([(b[0] + frame * GOLDEN) % 1.0, (b[1] + frame * SILVER) % 1.0], axis=-1)
+
+
 def _validate(schedule, frame, noise_size) -> tuple[str, int]:
     schedule = check_schedule(schedule)
     frame = check_frame(frame)
@@ -241,16 +262,17 @@ def schedule_uniforms(schedule: str, frame: int, *, seed=0, noise_size: int = NO
 
     Parameters
     ----------
-    schedule : {"white", "rotate", "r2", "gtao"}
+    schedule : {"white", "rotate", "r2", "gtao", "blue"}
         The schedule (:data:`SCHEDULES`; ``docs/screenspace.md``, "Noise schedules").
     frame : int
         The frame, >= 0.
     seed : int, numpy.random.Generator or None, optional
         The white texture's seed (``"white"``, ``"rotate"``; default 0), as the estimators
-        take it; unused by ``"r2"`` and ``"gtao"``, which are deterministic (still checked).
+        take it; unused by ``"r2"``, ``"gtao"`` and ``"blue"``, which are deterministic
+        (still checked).
     noise_size : int, optional
-        Edge T of the ``"white"`` and ``"rotate"`` tiles (>= 1, default 4). ``"r2"`` and
-        ``"gtao"`` ignore it: their tile is 64 x 64.
+        Edge T of the ``"white"`` and ``"rotate"`` tiles (>= 1, default 4). ``"r2"``,
+        ``"gtao"`` and ``"blue"`` ignore it: their tile is 64 x 64.
 
     Returns
     -------
@@ -273,11 +295,15 @@ def schedule_uniforms(schedule: str, frame: int, *, seed=0, noise_size: int = NO
     ((64, 64, 2), [0.5, 0.5])
     >>> bool(np.array_equal(schedule_uniforms("gtao", 3), schedule_uniforms("gtao", 27)))
     True
+    >>> ranks = schedule_uniforms("blue", 0)[..., 0] * 4096 - 0.5     # frame 0: the stored ranks
+    >>> bool(np.array_equal(np.sort(ranks.round().ravel()), np.arange(4096)))
+    True
     """
     schedule, frame = _validate(schedule, frame, noise_size)
-    if schedule in ("r2", "gtao"):
+    deterministic = {"r2": _r2_uniforms, "gtao": _gtao_uniforms, "blue": _blue_uniforms}
+    if schedule in deterministic:
         as_rng(seed)                       # unused, but checked as everywhere
-        return _r2_uniforms(frame) if schedule == "r2" else _gtao_uniforms(frame)
+        return deterministic[schedule](frame)
     maker = _white_texture if schedule == "white" else _rotate_texture
     return _read(maker(seed, frame, noise_size, 3))
 
@@ -319,7 +345,8 @@ def schedule_texture(schedule: str, frame: int, *, seed=0, noise_size: int = NOI
     ``[seed, 0]`` as ``seed`` (trailing zero words add no entropy), so frame 0 follows the same
     rule; the int seed s + n 2^32 coincides with frame n of seed s. ``"rotate"``: frame 0's white
     texture turned about the z axis by 2 pi frac(n GOLDEN) (the step jitter z unchanged).
-    ``"r2"``, ``"gtao"``: :func:`uniforms_to_texture` of :func:`schedule_uniforms` (64 x 64).
+    ``"r2"``, ``"gtao"``, ``"blue"``: :func:`uniforms_to_texture` of :func:`schedule_uniforms`
+    (64 x 64).
     Arguments as for :func:`schedule_uniforms`; ``dim`` 2 or 3.
 
     Examples
