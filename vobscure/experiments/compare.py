@@ -326,7 +326,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         the verdict and ``summary["temporal"]`` lists ``{"config", "reference", "rmse"}``.
     motion, step, cameras, schedules, accumulate, clamp, reproject, denoise
         The sequence's camera path (``step``: per frame, :func:`vobscure.temporal.camera_path`), noise schedules (``"white"``, ``"rotate"``, ``"r2"``,
-        ``"gtao"``; comma-separated or a list), accumulation settings (``"mean"``,
+        ``"gtao"``, ``"blue"``; comma-separated or a list), accumulation settings (``"mean"``,
         ``"ema:ALPHA"``, ``"clip:ALPHA"``) and accumulator options
         (:class:`vobscure.temporal.Accumulator`); used only with ``frames``.
 

@@ -27,13 +27,10 @@ from .common import new_figure, progress_bar, save_figure
 from .verdict import POOR_RMSE, TARGET_FACTOR
 
 __all__ = ["TemporalConfig", "TemporalResult", "configurations", "run", "frames_to_target", "temporal_verdict",
-           "plot", "VERDICT_FRAMES", "SCHEDULE_WORDS"]
+           "plot", "VERDICT_FRAMES"]
 
 #: The frame after which the verdict compares the configurations (or the last frame, when fewer).
 VERDICT_FRAMES = 8
-#: How the verdict names the noise schedules.
-SCHEDULE_WORDS = {"white": "independent white noise per frame", "rotate": "the noise texture rotated per frame",
-                  "r2": "XeGTAO's Hilbert-R2 sequence (period 64)", "gtao": "GTAO's 6 rotations x 4 offsets (period 24)"}
 
 
 @dataclass(frozen=True)

@@ -273,7 +273,7 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         (i mod noise_size, j mod noise_size). Unused without ``randomize``.
     frame : int, optional
         The frame (>= 0, default 0) of the noise ``schedule``.
-    schedule : {"white", "rotate", "r2", "gtao"}, optional
+    schedule : {"white", "rotate", "r2", "gtao", "blue"}, optional
         How the texture changes from frame to frame (:mod:`vobscure.screenspace.noise`,
         ``docs/screenspace.md``, "Noise schedules"): ``"white"`` (default; frame 0 is the
         texture above), ``"rotate"``, ``"r2"`` or ``"gtao"`` (a 64 x 64 tile whatever
