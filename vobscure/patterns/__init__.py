@@ -66,6 +66,7 @@ from .electrostatic import ELECTROSTATIC
 from .generators import GENERATOR_VERSION, LLOYD, METHODS, generate
 from .metric import (FAMILIES, QUALITY_NOTES, QUALITY_SEED, QUALITY_TRIALS, QUALITY_VERSION, cap_volume,
                      crease_volume, quality, squared_errors)
+from .quick import PAIR_BUDGET, QUICK, REFINE_MAX, REFINE_STEPS, SAMPLES_LIMIT, SLOW_LIMIT, SLOW_METHODS
 from .precomputed import (TABLE_DIR, TABLE_EXTRA_N, TABLE_N, VARIANTS, build_tables, load_table, rescore_tables,
                           variant_flags)
 
@@ -83,4 +84,6 @@ __all__ = [
     "build_tables",
     "METHODS",
     "TABLE_DIR",
+    "QUICK",
+    "SAMPLES_LIMIT",
 ]

@@ -15,14 +15,16 @@ from ._pattern import SamplePattern, int_seed
 from . import generators
 from .generators import METHODS
 from .precomputed import DIM, recorded_qualities, table_or_generated
+from .quick import QUICK, check_count, quick_pattern
 
 __all__ = ["disk", "ball", "best_method", "BEST", "BEST_FALLBACK"]
 
 #: The default ``method`` of :func:`disk` and :func:`ball`: per count and variant, the table
 #: entry with the lowest recorded quality (see :func:`best_method`).
 BEST = "best"
-#: What ``method="best"`` uses when no table holds the count: the paper's generator.
-BEST_FALLBACK = "electrostatic"
+#: What ``method="best"`` uses when no table holds the count: the quick generator (a spiral
+#: with a bounded electrostatic refinement, :mod:`vobscure.patterns.quick`).
+BEST_FALLBACK = QUICK
 
 
 def _check_bool(value, name: str) -> bool:
@@ -52,7 +54,8 @@ def make_pattern(dim: int, n, method, center, symmetric, seed) -> SamplePattern:
     (5, 2)
     """
     n = check_int(n, "n")
-    check_choice(method, "method", (BEST,) + METHODS)
+    check_choice(method, "method", (BEST, QUICK) + METHODS)
+    check_count(n, method)
     symmetric = _check_bool(symmetric, "symmetric")
     center = _resolve_center(n, center, symmetric)
     selection = None
@@ -61,7 +64,11 @@ def make_pattern(dim: int, n, method, center, symmetric, seed) -> SamplePattern:
         selection = {"rule": "lowest recorded quality among the tables holding n" if scores
                      else f"no table holds n: {BEST_FALLBACK}", "candidates": dict(scores)}
     key = int_seed(seed)
-    if key is None:
+    if method == QUICK:
+        if key is None:
+            as_rng(seed)                              # validated; the quick pattern does not use it
+        p = quick_pattern(dim, n, symmetric, center)
+    elif key is None:
         p = generators.generate(dim, n, method, symmetric, center, as_rng(seed))
     else:
         p = table_or_generated(dim, n, method, symmetric, center, key)
