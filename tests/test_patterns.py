@@ -611,7 +611,8 @@ def test_public_names_and_no_private_imports_between_modules():
     root = Path(P.__file__).resolve().parents[1]
     for path in root.rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.level > 0 and "patterns" in (node.module or "") + str(path):
+            if (isinstance(node, ast.ImportFrom) and node.level > 0
+                    and "patterns" in (node.module or "") + path.relative_to(root).as_posix()):
                 private = [a.name for a in node.names if a.name.startswith("_")]
                 assert not private, f"{path.relative_to(root)} imports {private} from {node.module}"
 
