@@ -683,20 +683,21 @@ def test_estimator_sizes_no_table_holds_run_a_bounded_refinement(repulsion_count
     gb = vo.render_gbuffer(slab, cam)
     C._default_pattern.cache_clear()
     try:
-        for samples in (34, 100, 200):
+        for estimator, dim, samples in (("vo_line", 2, 34), ("vo_line", 2, 100), ("vo_line", 2, 200),
+                                        ("vo_point", 3, 200), ("vo_point", 3, 500)):
             before = repulsion_counter.calls
-            v = vo.vo_line(gb, radius=0.3, samples=samples)
+            v = getattr(vo, estimator)(gb, radius=0.3, samples=samples)
             assert np.isfinite(v).any()
-            p = disk(samples)
+            p = (disk if dim == 2 else ball)(samples)
             ref = p.provenance["refinement"]
             assert p.method == "quick" and p.provenance["selection"]["rule"] == "no table holds n: quick"
-            layout = Q.Layout(2, samples, True, samples % 2 == 1)
+            layout = Q.Layout(dim, samples, True, samples % 2 == 1)
             assert ref["steps_budget"] == Q.refinement_steps(layout) <= Q.REFINE_STEPS
             assert ref["steps_budget"] * layout.free * samples <= Q.PAIR_BUDGET
             assert ref["steps_done"] <= ref["steps_budget"]
             # the O(n^2) repulsion ran within the budget (the second disk() call is cached)
             assert repulsion_counter.calls - before <= _refinement_calls(ref["steps_budget"])
-            assert ref["skipped"] == (samples > Q.REFINE_MAX[2])
+            assert ref["skipped"] == (samples > Q.REFINE_MAX[dim])
     finally:
         C._default_pattern.cache_clear()
 
