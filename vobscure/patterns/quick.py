@@ -1,7 +1,9 @@
 """Patterns for the counts no table holds: a spiral, a bounded electrostatic refinement, limits.
 
 ``method="quick"`` (and ``method="best"`` where no table holds the count) builds a pattern in
-at most about a second at any count up to :data:`SAMPLES_LIMIT`:
+about a second at most at any count up to :data:`SAMPLES_LIMIT` (measured on 2 shared cores:
+0.4-1.4 s with the process's one-time tables built, 1.3-2.1 s on a process's first call;
+``benchmarks/bench_patterns.py``):
 
 1. The start is the ``"spiral"`` generator's pattern: the sunflower spiral on the disk,
    spherical-Fibonacci shells in the ball (Vogel 1979), O(n).
