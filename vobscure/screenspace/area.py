@@ -330,7 +330,10 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         ``vobscure.patterns.disk(n)``, or a :class:`~vobscure.patterns.SamplePattern` with
         (n, 2) ``points`` in the unit disk and (n,) footnote-5 ``weights``. Default 1: the
         centre alone, i.e. the whole disk as one area sample, the paper's single-sample
-        method.
+        method. Counts n <= 33, 64, 65, 128, 129, 256 and 257 load from the precomputed
+        tables; any other count is built by the quick generator
+        (:mod:`vobscure.patterns.quick`: about a second at most, once per process). n > 65536
+        raises ValueError.
     normal_clamp : bool, optional
         Clip every chord at the tangent plane (Sec. 4.4); the depth distribution is then
         that of the surface relative to the tangent plane (see Notes). A flat surface reads

@@ -167,7 +167,12 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         ``vobscure.patterns.disk(n)`` (default 9: the larger line configuration of Loos &
         Sloan 2010, Table 1), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 2) ``points`` in the unit disk and
-        (n,) footnote-5 ``weights``.
+        (n,) footnote-5 ``weights``. Counts n <= 33, 64, 65, 128, 129, 256 and 257 load from
+        the precomputed tables; any other count is built by the quick generator
+        (:mod:`vobscure.patterns.quick`: about a second at most, once per process): the
+        sunflower spiral refined by a bounded electrostatic relaxation for n <= 128, the
+        spiral as it is above. n > 65536 raises ValueError (for converged values use
+        :func:`vobscure.vo_reference`).
     normal_clamp : bool, optional
         Restrict the ball to the half-ball on the normal's side (Sec. 4.4): every chord is
         clipped at the tangent plane. A flat open surface then reads 1.0 instead of 0.5.

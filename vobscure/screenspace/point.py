@@ -115,7 +115,7 @@ def point_taps(samples=12) -> int:
     Parameters
     ----------
     samples : int or SamplePattern, optional
-        As in :func:`vo_point`: a count n >= 1 for the default pattern
+        As in :func:`vo_point`: a count 1 <= n <= 65536 for the default pattern
         ``vobscure.patterns.ball(n)`` (default 12), or a ball pattern ((n, 3) ``points``).
 
     Returns
@@ -126,7 +126,7 @@ def point_taps(samples=12) -> int:
     Raises
     ------
     ValueError
-        If ``samples`` is neither a count >= 1 nor a ball pattern.
+        If ``samples`` is neither a count 1 <= n <= 65536 nor a ball pattern.
 
     Examples
     --------
@@ -231,7 +231,12 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         ``vobscure.patterns.ball(n)`` (default 12: the smaller point configuration of Loos &
         Sloan 2010, Table 1, and ``vobscure compare``'s default), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 3) ``points`` in the unit ball
-        and (n,) volume ``weights``.
+        and (n,) volume ``weights``. Counts n <= 40, 64, 65, 128, 129, 256 and 257 load
+        from the precomputed tables; any other count is built by the quick generator
+        (:mod:`vobscure.patterns.quick`: about a second at most, once per process): a
+        spherical-Fibonacci spiral refined by a bounded electrostatic relaxation for
+        n <= 512, the spiral as it is above. n > 65536 raises ValueError (for converged
+        values use :func:`vo_reference`).
     normal_clamp : bool, optional
         Reflect samples below the tangent plane above it (Sec. 4.4, after Filion &
         McNaughton 2008): the half-ball on the normal's side. A plane then reads 1.0
