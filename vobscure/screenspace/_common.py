@@ -245,6 +245,11 @@ def as_pattern(samples, dim: int, name: str = "samples") -> SamplePattern:
             raise ValueError(f"{name} must be a {kind} pattern, got points of shape {samples.points.shape}")
         return samples
     n = check_int(samples, name)
+    from ..patterns import SAMPLES_LIMIT
+
+    if n > SAMPLES_LIMIT:
+        raise ValueError(f"{name} must be at most {SAMPLES_LIMIT} points per pixel, got {n}; for converged values "
+                         "use vo_reference (line integrals, not a pattern)")
     return _default_pattern(n, dim)
 
 
