@@ -507,7 +507,15 @@ def _check_exr_size(path, head) -> None:
     available = _available_memory()
     if available is not None and 4 * values > available:
         raise ValueError(f"not a readable EXR file: {path} (its {', '.join(sizes)} pixels need up to "
-                         f"{4 * values / 2**30:.1f} GiB, and {available / 2**30:.1f} GiB of memory is available)")
+                         f"{_bytes(4 * values)}, and {_bytes(available)} of memory is available)")
+
+
+def _bytes(n: int) -> str:
+    """A byte count for people: ``16 KiB``, ``37.3 GiB``."""
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{n} B"
+        n /= 1024
 
 
 def _available_memory() -> int | None:
