@@ -36,8 +36,8 @@ COMPARE = dict(size=(16, 16), methods="point:4", references=("screen",), quick=T
                progress=False, repeats=1, screen_samples=16)
 COMPARE_ARGS = ["compare", "--scene", "slab", "--size", "16", "16", "--methods", "point:4", "--reference",
                 "screen", "--quick", "--repeats", "1", "--screen-samples", "16", "--quiet"]
-#: Delay added to each rename of a set's move in the concurrency test: long enough that two
-#: unlocked moves interleave, short enough for a quick test.
+#: Delay added to each rename of the slow run's move in the concurrency test: long enough for
+#: the other run to commit in between, short enough for a quick test.
 RENAME_DELAY = 0.02
 
 
@@ -160,15 +160,19 @@ def test_a_compare_killed_mid_write_leaves_the_old_set_and_the_next_run_cleans_u
 
 
 def test_two_runs_into_one_folder_end_with_one_runs_set(tmp_path, monkeypatch):
+    # run A moves its files slowly; run B commits while A is half way: without the lock B's
+    # files would land between A's, and A's later renames would leave a mixed set
     real = os.replace
+    a_moving = threading.Event()
 
     def slow(src, dst):
-        time.sleep(RENAME_DELAY)
+        if Path(src).is_file() and Path(src).read_bytes() == b"A":
+            a_moving.set()
+            time.sleep(RENAME_DELAY)
         return real(src, dst)
 
     monkeypatch.setattr(_io.os, "replace", slow)
     names = [f"f{i}.txt" for i in range(6)]
-    start = threading.Barrier(2)
     errors = []
 
     def run(tag):
@@ -176,7 +180,8 @@ def test_two_runs_into_one_folder_end_with_one_runs_set(tmp_path, monkeypatch):
             with _io.file_set(tmp_path, "run") as stage:
                 for n in names:
                     (stage / n).write_text(tag)
-                start.wait()
+                if tag == "B":
+                    assert a_moving.wait(10.0)
         except Exception as exc:   # noqa: BLE001 - reported below
             errors.append(exc)
 
@@ -186,8 +191,8 @@ def test_two_runs_into_one_folder_end_with_one_runs_set(tmp_path, monkeypatch):
     for t in threads:
         t.join()
     assert not errors
-    contents = {(tmp_path / n).read_text() for n in names}
-    assert len(contents) == 1, f"a mixed set: {[(n, (tmp_path / n).read_text()) for n in names]}"
+    contents = [(tmp_path / n).read_text() for n in names]
+    assert contents == ["B"] * len(names), f"not one run's set: {contents}"
 
 
 def test_a_file_of_the_previous_set_that_the_new_one_lacks_is_removed(tmp_path):
