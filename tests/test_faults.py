@@ -98,6 +98,18 @@ def test_a_committed_set_of_a_dead_writer_is_finished(tmp_path):
     assert not staging.exists()
 
 
+def test_the_next_commands_start_finishes_a_set_killed_while_moving(tmp_path, capsys):
+    (tmp_path / "crease_ao.npz").write_text("new")          # moved before the kill
+    (tmp_path / "crease_ao_depth.png").write_text("old")
+    staging = _part(tmp_path, "crease_ao", _dead_pid())
+    staging.mkdir()
+    (staging / "crease_ao_depth.png").write_text("new")
+    (staging / _io.COMMIT).write_text(json.dumps({"files": ["crease_ao.npz", "crease_ao_depth.png"]}))
+    assert main(["render", "--scene", "nosuchscene", "--quiet", "--out", tmp_path]) == 2   # fails after the check
+    assert "nosuchscene" in capsys.readouterr().err
+    assert _snapshot(tmp_path) == {"crease_ao.npz": b"new", "crease_ao_depth.png": b"new"}
+
+
 def test_the_next_estimate_removes_a_dead_writers_part(tmp_path, capsys):
     np.savez(tmp_path / "frame.npz", depth=np.full((8, 8), 2.0), normal=np.tile([0.0, 0.0, -1.0], (8, 8, 1)))
     out = tmp_path / "vo"

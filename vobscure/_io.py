@@ -10,8 +10,8 @@ A run that writes several files (``vobscure render``, ``vobscure compare``) writ
 :func:`file_set`: into a fresh staging folder beside the targets, then, under a lock on the
 folder, moved into place one rename each, after a ``COMMIT`` marker that makes the moves
 replayable. A run killed before the marker leaves the previous set untouched (its staging
-folder is removed as a stale part); killed after it, the next writer into the folder finishes
-the moves. Files of the previous set (recorded in a manifest) that the new set lacks are removed,
+folder is removed as a stale part); killed after it, during the moves, the folder is mixed
+until the next writer into it (or :func:`check_writable_dir` of it) finishes the moves. Files of the previous set (recorded in a manifest) that the new set lacks are removed,
 so the set is always one run's as a whole; files of the folder that no set wrote are kept.
 """
 
@@ -144,7 +144,7 @@ def check_writable_dir(path, what: str) -> Path:
     """Make the folder ``path`` (and its parents) and check that a file can be created in it.
 
     Called before a job's work, so that an output that cannot be written fails in a second,
-    not after the work. Raises :class:`OutputError` naming ``what`` (the option, e.g.
+    not after the work; it also cleans the folder's stale parts (:func:`clean_stale_parts`). Raises :class:`OutputError` naming ``what`` (the option, e.g.
     ``"--out"``) and the path.
     """
     path = Path(path)
@@ -161,6 +161,7 @@ def check_writable_dir(path, what: str) -> Path:
     except OSError as exc:
         raise OutputError(exc.errno or errno.EACCES,
                           f"{what} {path}: cannot write there ({exc.strerror or exc})") from None
+    clean_stale_parts(path)   # a set a killed run was moving into place is finished now, not after the work
     return path
 
 
