@@ -265,6 +265,7 @@ def test_a_cache_that_is_a_file_warns_once_and_the_run_goes_on(tmp_path, capsys)
     assert len(lines) == 1 and "warning: cannot write the reference cache directory" in lines[0], err
     assert str(blocker) in lines[0] and "continuing without caching" in lines[0]
     assert (tmp_path / "out" / "results.csv").is_file() and blocker.read_text() == "not a folder"
+    assert json.loads((tmp_path / "out" / "provenance.json").read_text())["cache"] is None
 
 
 @pytest.mark.filterwarnings("default::vobscure.experiments.cache.CacheWarning")

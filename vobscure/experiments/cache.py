@@ -345,6 +345,8 @@ class ReferenceCache:
             reason = f"{type(exc).__name__}: {exc.strerror or exc}"
             if self.on_error == "warn":
                 self._unwritable = True
+                if not self.directory.is_dir():
+                    self.enabled = False   # nothing to read either (a job's provenance then names no cache)
                 warnings.warn(f"cannot write the reference cache directory {str(self.directory)!r} ({reason}); "
                               f"continuing without caching (references are computed, not stored)",
                               CacheWarning, stacklevel=4)
