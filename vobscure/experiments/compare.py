@@ -24,7 +24,8 @@ With ``thickness="layers"`` the G-buffer is depth-peeled to ``layers`` surfaces 
 the methods whose registry entry reads layers (:attr:`vobscure.methods.Method.thickness_kinds`)
 take their thickness from its solid intervals; the verdict says which did.
 
-Outputs (all written atomically into ``out``): ``results.csv``, ``results.md`` (verdict, then
+Outputs (written into ``out`` as one set that replaces the previous run's as a whole,
+:func:`vobscure._io.file_set`): ``results.csv``, ``results.md`` (verdict, then
 the table), ``summary.json`` (the verdict as data), ``tradeoff.png`` (error against time, taps
 and texels per pixel, one curve per method, the Pareto front marked), ``gallery.png`` (each
 estimate beside the references and its error map) and ``provenance.json``. With ``orbit`` > 1,
@@ -42,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import methods as _methods
+from .._io import check_writable_dir, file_set
 from .. import references as _references
 from .._validate import check_choice, check_int, check_positive
 from .common import (choose_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
@@ -437,6 +439,8 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     radii = tuple(check_positive(r, "radius") for r in np.atleast_1d(radii))
     store = open_cache(cache)
     out = Path(out) if out is not None else Path("vobscure-out") / f"compare-{scene_name}"
+    if write:
+        check_writable_dir(out, "out")   # before the work, not after it
 
     t_start = time.perf_counter()
     stages = Stages()
@@ -648,21 +652,23 @@ def _markdown(rows, summary, provenance) -> str:
 
 
 def _write(out: Path, rows, summary, provenance, refs, images, gb, plots, sequence=None) -> dict:
-    out.mkdir(parents=True, exist_ok=True)
-    files = {"results.csv": write_csv(out / "results.csv", rows),
-             "results.md": write_text(out / "results.md", _markdown(rows, summary, provenance)),
-             "summary.json": write_json(out / "summary.json", summary)}
-    if sequence is not None:
-        files["temporal.csv"] = write_csv(out / "temporal.csv", sequence.rows)
-    if plots:
-        files["tradeoff.png"] = _tradeoff(out / "tradeoff.png", rows, provenance)
-        files["gallery.png"] = _gallery(out / "gallery.png", rows, refs, images, gb)
+    """Write the run's files as one set (:func:`vobscure._io.file_set`): they replace the
+    previous run's set in ``out`` as a whole, or, when the run is interrupted, not at all."""
+    with file_set(out, "compare") as stage:
+        names = [write_csv(stage / "results.csv", rows).name,
+                 write_text(stage / "results.md", _markdown(rows, summary, provenance)).name,
+                 write_json(stage / "summary.json", summary).name]
         if sequence is not None:
-            from .temporal import plot as plot_temporal
+            names.append(write_csv(stage / "temporal.csv", sequence.rows).name)
+        if plots:
+            names.append(_tradeoff(stage / "tradeoff.png", rows, provenance).name)
+            names.append(_gallery(stage / "gallery.png", rows, refs, images, gb).name)
+            if sequence is not None:
+                from .temporal import plot as plot_temporal
 
-            files["temporal.png"] = plot_temporal(out / "temporal.png", sequence)
-    files["provenance.json"] = write_json(out / "provenance.json", provenance)
-    return files
+                names.append(plot_temporal(stage / "temporal.png", sequence).name)
+        names.append(write_json(stage / "provenance.json", provenance).name)
+    return {name: out / name for name in names}
 
 
 _METHOD_COLORS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22")
