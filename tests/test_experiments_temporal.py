@@ -116,6 +116,10 @@ def test_verdict_names_the_cheapest_that_reaches_the_target():
     assert g["winner"] == "fast" and g["one_frame_winner"] == "slow"
     assert g["frames_to_target"] == {"fast": 3, "slow": 1}
     assert temporal.frames_to_target([0.3, np.nan, 0.2], 0.1) is None
+    # within the timing tie, the one that gets there first is named
+    data = rows("a", 1.00, [0.3, 0.2, 0.2, 0.09]) + rows("b", 1.05, [0.3, 0.09, 0.08, 0.07])
+    g = temporal.temporal_verdict(data, [C("a"), C("b")], target_rmse=0.1)["groups"][0]
+    assert g["winner"] == "b" and g["frames_to_target"] == {"a": 4, "b": 2}
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -27,10 +27,13 @@ from .common import new_figure, progress_bar, save_figure
 from .verdict import POOR_RMSE, TARGET_FACTOR
 
 __all__ = ["TemporalConfig", "TemporalResult", "configurations", "run", "frames_to_target", "temporal_verdict",
-           "plot", "VERDICT_FRAMES"]
+           "plot", "VERDICT_FRAMES", "TIME_TIE"]
 
 #: The frame after which the verdict compares the configurations (or the last frame, when fewer).
 VERDICT_FRAMES = 8
+#: Times per frame within this fraction of the least count as equal in the verdict: on 2 shared
+#: cores one frame's time moves by about that much from run to run (docs/temporal.md).
+TIME_TIE = 0.15
 
 
 @dataclass(frozen=True)
@@ -344,6 +347,19 @@ def _pick(cands, key):
     return min(cands, key=key) if cands else None
 
 
+def _cheapest(cands, per_frame, reach, err):
+    """The configuration of ``cands`` with the least time per frame; those within
+    :data:`TIME_TIE` of it count as equally fast (a shared machine's timing noise: a noise
+    schedule or an accumulation does not change an estimator's cost by that much), and among
+    them the one that reaches the target first, then the most accurate, wins."""
+    cands = [c for c in cands if np.isfinite(per_frame[c])]
+    if not cands:
+        return None
+    fastest = min(per_frame[c] for c in cands)
+    tied = [c for c in cands if per_frame[c] <= (1.0 + TIME_TIE) * fastest]
+    return min(tied, key=lambda c: (reach[c], err[c], per_frame[c]))
+
+
 def temporal_verdict(rows, configs, *, target_rmse=None, motion="static", missing=None) -> dict:
     """Sentences and numbers from :func:`run`'s rows: per reference, which configuration reaches the
     target error after :data:`VERDICT_FRAMES` frames (or the last) at the least time per frame,
@@ -354,7 +370,8 @@ def temporal_verdict(rows, configs, *, target_rmse=None, motion="static", missin
     sampling error alone, what accumulation reduces). The time per frame is the estimator plus
     the accumulation, the least over the frames: every frame does the same work, and on a
     shared machine the least is the one least disturbed by other load (as the best of the
-    timed repeats elsewhere).
+    timed repeats elsewhere). Times within :data:`TIME_TIE` of the least count as equal, and
+    among those the configuration that reaches the target first is named.
 
     Returns
     -------
@@ -394,8 +411,10 @@ def temporal_verdict(rows, configs, *, target_rmse=None, motion="static", missin
         best_k = min((err[lab][K - 1] for lab in labs if np.isfinite(err[lab][K - 1])), default=float("nan"))
         target = float(target_rmse) if target_rmse is not None else TARGET_FACTOR * best_k
         reach = {lab: frames_to_target(err[lab], target) for lab in labs}
-        win = _pick([lab for lab in labs if reach[lab] is not None and reach[lab] <= K], lambda lab: per_frame[lab])
-        one = _pick([lab for lab in labs if reach[lab] == 1], lambda lab: per_frame[lab])
+        win = _cheapest([lab for lab in labs if reach[lab] is not None and reach[lab] <= K], per_frame, reach,
+                        {lab: err[lab][K - 1] for lab in labs})
+        one = _cheapest([lab for lab in labs if reach[lab] == 1], per_frame, reach,
+                        {lab: err[lab][0] for lab in labs})
         what = "the converged screen-space VO (the sampling error)" if ref == "screen" else f"{ref!r}"
         head = (f"Against {what}, target RMSE {target:.4f}"
                 + ("" if target_rmse is not None else f" ({TARGET_FACTOR:g} x the best after {K} frames)") + ": ")
