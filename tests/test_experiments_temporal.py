@@ -171,3 +171,5 @@ def test_compare_frames_errors(tmp_path, capsys):
     gb = vo.render_gbuffer(vo.scenes.slab(), vo.scenes.slab().camera(size=(8, 8)))
     with pytest.raises(ValueError, match="G-buffer is one frame"):
         vo.experiments.compare.compare(gb, frames=3, write=False, cache=False)
+    with pytest.raises(ValueError, match="layers"):
+        vo.experiments.compare.compare("slab", frames=3, thickness="layers", write=False, cache=False)

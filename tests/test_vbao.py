@@ -377,3 +377,18 @@ def test_float32_agrees_on_the_cornell_box():
         d = np.abs(v32[gb.valid].astype(np.float64) - v64[gb.valid])
         assert d.max() <= np.pi / 32 / 3 + FLOAT32_TOL, kw
         assert np.mean(d > FLOAT32_TOL) <= FLOAT32_FLIP_FRACTION, kw
+
+
+def test_unclipped_one_slice_frames_average_to_the_integral():
+    # As GTAO's: an open plane seen obliquely is open (1); one slice per frame at a random angle
+    # averages to it only unclipped. A z-test on the mean of 64 independent frames' means.
+    cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(16, 16), fov_y=40)
+    gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+    frames = 64
+    for clip in (False, True):
+        means = np.array([np.nanmean(vo.vbao(gb, radius=0.3, slices=1, frame=n, clip=clip)) for n in range(frames)])
+        z = (means.mean() - 1.0) / (means.std(ddof=1) / np.sqrt(frames))
+        if clip:
+            assert z < -5.0
+        else:
+            assert abs(z) < 3.29          # two-sided, false-failure rate 1e-3

@@ -404,6 +404,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     repeats = check_int(repeats, "repeats")
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
     frames = check_int(frames, "frames", minimum=0) if frames else 0
+    if (frames or cameras is not None) and isinstance(thickness, str):
+        raise ValueError("frames with thickness='layers' is not supported: the layered G-buffer is not rendered "
+                         "per frame; give a number or no thickness")
     thickness, layers = check_thickness(thickness, layers, frame=sc if frame else None)
     if target_rmse is not None:
         target_rmse = check_positive(target_rmse, "target_rmse")

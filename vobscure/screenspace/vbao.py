@@ -69,7 +69,7 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
          sectors: int = 32, sector_rule: str = "centre", step_power: float = SAMPLE_DISTRIBUTION_POWER,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
          noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
-         schedule: str = "white") -> np.ndarray:
+         schedule: str = "white", clip: bool = True) -> np.ndarray:
     """Ambient occlusion within ``radius`` by a visibility bitmask per slice (VBAO).
 
     The slices, steps and taps are :func:`vobscure.screenspace.gtao.gtao`'s (same arguments,
@@ -132,8 +132,9 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
     step_power : float, optional
         Step j of n reaches ((j + u) / n) ** step_power of the radius (> 0;
         default 2, XeGTAO's and Bevy's; 1: linear; SSRT3's ``_ExpFactor``).
-    randomize, seed, fetch, offscreen, noise_size, step_jitter, frame, schedule
-        As in :func:`vobscure.screenspace.gtao.gtao`.
+    randomize, seed, fetch, offscreen, noise_size, step_jitter, frame, schedule, clip
+        As in :func:`vobscure.screenspace.gtao.gtao` (``clip=False``: one-slice frames average to
+        the integral only unclipped, as GTAO's).
 
     Returns
     -------
@@ -184,7 +185,8 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
                      sectors=sectors, sector_rule=sector_rule, step_power=step_power, randomize=randomize,
                      fetch=fetch, offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
     texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
-    kernel = partial(_vbao_kernel, radius=radius, texture=texture, intervals=gbuffer.intervals, **options)
+    kernel = partial(_vbao_kernel, radius=radius, texture=texture, intervals=gbuffer.intervals,
+                     clip=C.check_bool(clip, "clip"), **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer), chunk=CHUNK_PIXELS)
 
 
@@ -540,7 +542,7 @@ def _run_masks(sectors: int) -> np.ndarray:
 
 
 def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickness_far, weighting, sectors,
-                 touch, step_power, fetch, offscreen, texture, intervals, r1_jitter=False):
+                 touch, step_power, fetch, offscreen, texture, intervals, r1_jitter=False, clip=True):
     """VBAO of one chunk of pixels (see :func:`vbao`): loops over slices and steps only."""
     k = len(px.index)
     v, b1, b2 = Hz.view_basis(px)
@@ -583,5 +585,6 @@ def _vbao_kernel(px, *, radius, slices, steps, thickness, linear, layers, thickn
         visibility = np.where(weight_sum > 0, visibility / np.where(weight_sum > 0, weight_sum, 1.0), 1.0)
     else:
         visibility /= slices
-    np.clip(visibility, 0.0, 1.0, out=visibility)
+    if clip:
+        np.clip(visibility, 0.0, 1.0, out=visibility)
     return visibility
