@@ -706,6 +706,7 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     ``camera`` (a :class:`~vobscure.Camera` of ``size``) replaces the scene's view."""
     from . import __version__
     from ._io import check_writable_dir, file_set, save_npz
+    from ._memory import render_job_need, require
     from .experiments.common import default_radius
     from .render import render_gbuffer
     from .groundtruth import ground_truth
@@ -717,6 +718,8 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     cam = sc.camera(tuple(size)) if camera is None else camera
     if radius is None:
         radius = default_radius(sc)
+    require(render_job_need(quantity, threads=threads), size=cam.size, reduce="--size",
+            what=f"rendering a {cam.width} x {cam.height} G-buffer with its ground truth")
     gb = render_gbuffer(sc, cam)
     ref = ground_truth(sc, gb, quantity=quantity, radius=radius, rays=rays, samples=samples,
                           seed=seed, progress=progress, threads=threads, allow_open=allow_open)
