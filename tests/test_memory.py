@@ -164,8 +164,27 @@ def test_compare_is_refused_before_any_work(monkeypatch, tmp_path):
     with pytest.raises(MemoryBudgetError, match=r"comparing on a 20000 x 20000 image needs about .* GiB "
                                                 r"\(\d+ bytes a pixel.*reduce size \(--size\)"):
         compare("cornell_box", size=(20000, 20000), cache=False, out=tmp_path / "out")
+    with pytest.raises(MemoryBudgetError, match=r"comparing on a 4000 x 3000 image"):
+        compare("cornell_box", size=(4000, 3000), frames=3, schedules="white,rotate", cache=False, write=False)
     assert time.perf_counter() - t0 < REFUSAL_SECONDS
     assert not (tmp_path / "out").exists()
+
+
+def test_the_compare_estimate_grows_with_what_is_kept():
+    base = dict(references=("screen", "ao"), configs=5, pixels=256 * 256)
+    need = _memory.compare_need(**base).bytes(256 * 256)
+    for more in (dict(radii=3), dict(layers=4), dict(frames=8, frame_configs=10), dict(configs=9),
+                 dict(references=("screen", "ao", "volumetric"))):
+        assert _memory.compare_need(**{**base, **more}).bytes(256 * 256) > need, more
+
+
+def test_compare_with_frames_runs_under_the_guard(monkeypatch):
+    from vobscure.experiments.compare import compare
+
+    monkeypatch.setenv(_memory.ENV_LIMIT, str(LIMIT))
+    res = compare("slab", size=(12, 12), methods="line:3", references=("screen",), frames=2, quick=True,
+                  cache=False, write=False)
+    assert res.rows and res.summary["temporal"]
 
 
 @pytest.mark.parametrize("command", ["render", "compare"])
