@@ -89,6 +89,13 @@ def test_cgroup_v1_limit_and_its_unlimited_value(fake_system):
     assert _memory.available_bytes() == 400000000
     (fake_system["v1"] / "memory.limit_in_bytes").write_text("9223372036854771712\n")   # v1's "no limit"
     assert _memory.available_bytes() == 2000000 * 1024
+    # the process's own group (the line of the memory controller) under the hierarchy
+    fake_system["cgroup"].write_text("5:cpu,cpuacct:/y\n4:memory:/x/job\n0::/\n")
+    group = fake_system["v1"] / "x" / "job"
+    group.mkdir(parents=True)
+    (group / "memory.limit_in_bytes").write_text("300000000\n")
+    (group / "memory.usage_in_bytes").write_text("50000000\n")
+    assert _memory.available_bytes() == 250000000
 
 
 def test_nothing_readable_falls_back_to_sysconf(fake_system):

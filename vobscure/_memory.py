@@ -96,25 +96,31 @@ def _meminfo_available(path: Path = None) -> int | None:
 
 def _cgroup_room() -> int | None:
     """Bytes the process's memory control group still allows (limit - usage), None when no
-    limit is set: cgroup v2 ``memory.max - memory.current`` of the process's own group, else
-    v1 ``memory.limit_in_bytes - memory.usage_in_bytes``."""
-    v2_dir = _CGROUP_V2
+    limit is set: cgroup v2 ``memory.max - memory.current``, v1 ``memory.limit_in_bytes -
+    memory.usage_in_bytes``, read in the process's own group (``/proc/self/cgroup``) and at the
+    hierarchy's root (what a container shows of its own group); the smallest room found."""
+    v2_dirs, v1_dirs = [_CGROUP_V2], [_CGROUP_V1]
     try:
-        for line in _PROC_CGROUP.read_text().splitlines():
-            if line.startswith("0::"):
-                v2_dir = _CGROUP_V2 / line[3:].strip().lstrip("/")
-                break
+        lines = _PROC_CGROUP.read_text().splitlines()
     except (OSError, UnicodeDecodeError):
-        pass
-    for directory, limit_name, usage_name in ((v2_dir, "memory.max", "memory.current"),
-                                              (_CGROUP_V2, "memory.max", "memory.current"),
-                                              (_CGROUP_V1, "memory.limit_in_bytes", "memory.usage_in_bytes")):
-        limit = _read_int(directory / limit_name)
-        if limit is None or limit >= _UNLIMITED:
+        lines = []
+    for line in lines:
+        parts = line.split(":", 2)
+        if len(parts) != 3:
             continue
-        usage = _read_int(directory / usage_name) or 0
-        return max(0, limit - usage)
-    return None
+        group = parts[2].strip().lstrip("/")
+        if parts[0] == "0" and parts[1] == "":
+            v2_dirs.insert(0, _CGROUP_V2 / group)
+        elif "memory" in parts[1].split(","):
+            v1_dirs.insert(0, _CGROUP_V1 / group)
+    rooms = []
+    for dirs, limit_name, usage_name in ((v2_dirs, "memory.max", "memory.current"),
+                                         (v1_dirs, "memory.limit_in_bytes", "memory.usage_in_bytes")):
+        for directory in dirs:
+            limit = _read_int(directory / limit_name)
+            if limit is not None and limit < _UNLIMITED:
+                rooms.append(max(0, limit - (_read_int(directory / usage_name) or 0)))
+    return min(rooms) if rooms else None
 
 
 def available_bytes() -> int | None:
@@ -123,7 +129,7 @@ def available_bytes() -> int | None:
     :data:`ENV_LIMIT` (``VOBSCURE_MEMORY_LIMIT``), when set, is the answer. Otherwise, on Linux,
     the smaller of ``MemAvailable`` (``/proc/meminfo``) and the room left under the process's
     memory control group limit (cgroup v2 ``memory.max - memory.current``, v1
-    ``memory.limit_in_bytes - memory.usage_in_bytes``) when one is set; elsewhere the free
+    ``memory.limit_in_bytes - memory.usage_in_bytes``; :func:`_cgroup_room`) when one is set; elsewhere the free
     physical pages (``os.sysconf``).
 
     Raises
