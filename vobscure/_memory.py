@@ -243,7 +243,8 @@ REFERENCE_KEPT_PIXEL = 16
 #: ``vobscure render``'s outputs: the PNG images and the archive's copies.
 RENDER_OUTPUT_PIXEL = 120
 #: compare's plots and metrics (error maps, thin-feature masks, the gallery's panels) per
-#: kept image, and its fixed figures.
+#: kept image, and its figures: an allowance, not measured alone (matplotlib's canvas is
+#: outside tracemalloc's view); the whole compare job is measured with it.
 PLOT_PIXEL = 24
 PLOT_FIXED = 64 << 20
 
