@@ -7,8 +7,9 @@ the peaks those estimates stand for and prints both, so the model is checked, no
 - per stage on the Cornell box at its suggested camera: ``render_gbuffer`` (one layer and
   ``layers=4``), every lazy world- and view-space image, each reference kind
   (``ground_truth`` ao / obscurance / volumetric, ``vo_reference``), the screen-space
-  estimators (the model has one figure: the largest's), the ``vobscure render`` job and a
-  whole ``compare()`` job;
+  estimators (the model has one figure: the largest's), the ``vobscure render`` job, the
+  ``vobscure estimate`` job (one frame; four with a flicker reference) and a whole
+  ``compare()`` job;
 - ``GBuffer.from_arrays`` of a float32 depth image (without normals: derived from the depth;
   and with float32 normals): its peak over its input's and its output's size.
 
@@ -132,6 +133,23 @@ def main(argv=None) -> int:
                 from vobscure.experiments.compare import DEFAULT_METHODS, compare, parse_methods
 
                 refs = ("screen", "volumetric", "ao")
+                depth = vo.render_gbuffer(scene, cam).depth.astype(np.float32)
+                for k in range(4):
+                    np.save(f"{tmp}/frame_{k}.npy", depth)
+                from vobscure.cli import main
+
+                fov = str(cam.to_dict()["fov_y"])
+                for frames, pattern, extra in ((1, "frame_0.npy", []), (4, "frame_*.npy", ["--flicker-reference", "64"])):
+                    argv = ["estimate", "--depth", f"{tmp}/{pattern}", "--fov", fov, "--radius", "0.5", "--quiet",
+                            "--out", f"{tmp}/est{frames}" + (".npy" if frames == 1 else ""), *extra]
+                    if frames > 1:
+                        import os
+
+                        os.makedirs(f"{tmp}/est{frames}", exist_ok=True)
+                    main(argv)                                           # warm-up: the first call's imports
+                    check(f"estimate ({frames} frame{'s, flicker' if extra else ''})", n,
+                          _bench.peak_bytes(lambda: main(argv)),
+                          mem.estimate_job_need(frames, flicker_reference=bool(extra)))
                 check("compare() (3 refs, 5 methods)", n,
                       _bench.peak_bytes(lambda: compare(scene, size=(n, n), references=refs, repeats=1, rays=64,
                                                         volume_samples=256, screen_samples=256, cache=False,

@@ -216,6 +216,25 @@ def test_the_command_refuses_a_huge_size_in_one_line(command, monkeypatch, tmp_p
     assert not any(p.suffix in (".npz", ".png") for p in tmp_path.rglob("*"))
 
 
+def test_the_estimate_command_refuses_before_the_first_estimate(monkeypatch, tmp_path, capsys):
+    depth = np.full((48, 64), 3.0, dtype=np.float32)
+    for k in range(3):
+        np.save(tmp_path / f"frame_{k}.npy", depth)
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = ["estimate", "--depth", str(tmp_path / "frame_*.npy"), "--fov", "40", "--radius", "0.5", "--quiet",
+            "--flicker-reference", "64", "--out", str(out)]
+    monkeypatch.setenv(_memory.ENV_LIMIT, str(100_000))      # 100 kB: less than three frames' work
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("vobscure estimate: error: estimating 3 frame(s) of 64 x 48 "
+                                               "with a flicker reference needs about"), err
+    assert "reduce the frames given (--depth) or --flicker-reference 0" in err[0]
+    assert not any(out.iterdir())
+    monkeypatch.setenv(_memory.ENV_LIMIT, str(1 << 30))
+    assert cli.main(argv) == 0 and len(list(out.iterdir())) == 3
+
+
 # --------------------------------------------------------------------------- the models
 @pytest.fixture(scope="module")
 def cornell():
@@ -261,6 +280,26 @@ def test_the_compare_model_covers_a_whole_job(cornell, tmp_path):
                                     suggest=False))
     need = _memory.compare_need(references=refs, configs=3, pixels=n * n)
     assert need.bytes(n * n) / peak >= LEAST_RATIO
+
+
+def test_the_estimate_model_covers_the_command(cornell, tmp_path):
+    n = 96
+    cam = cornell.camera((n, n))
+    depth = vo.render_gbuffer(cornell, cam).depth.astype(np.float32)
+    for k in range(3):
+        np.save(tmp_path / f"frame_{k}.npy", depth)
+    fov = str(cam.to_dict()["fov_y"])
+    for frames, extra in ((1, []), (3, ["--flicker-reference", "64"])):
+        out = tmp_path / f"out{frames}"
+        out.mkdir()
+        pattern = "frame_0.npy" if frames == 1 else "frame_*.npy"
+        argv = ["estimate", "--depth", str(tmp_path / pattern), "--fov", fov, "--radius", "0.5", "--quiet",
+                "--out", str(out / "v.npy" if frames == 1 else out), *extra]
+        assert cli.main(argv) == 0                               # the first call's imports
+        status, peak = _peak(lambda: cli.main(argv))
+        assert status == 0
+        need = _memory.estimate_job_need(frames, flicker_reference=bool(extra))
+        assert need.bytes(n * n) / peak >= LEAST_RATIO, (frames, need.bytes(n * n) / peak)
 
 
 # --------------------------------------------------------------------------- from_arrays

@@ -22,7 +22,8 @@ from pathlib import Path
 
 __all__ = ["MemoryBudgetError", "available_bytes", "format_bytes", "require", "Need", "MEMORY_FRACTION",
            "ENV_LIMIT", "MODEL_UNDER", "gbuffer_need", "lazy_images_need", "reference_need",
-           "estimator_need", "render_job_need", "compare_need", "count_items"]
+           "estimator_need", "render_job_need", "compare_need", "count_items",
+           "estimate_job_need", "require_estimate"]
 
 #: A request is refused when its estimate exceeds this fraction of the memory available: the
 #: rest is left for what the models do not count (the interpreter, Embree's scene, the page
@@ -242,6 +243,10 @@ IMAGE_PIXEL = 8
 REFERENCE_KEPT_PIXEL = 16
 #: ``vobscure render``'s outputs: the PNG images and the archive's copies.
 RENDER_OUTPUT_PIXEL = 120
+#: One frame of ``vobscure estimate`` read and converted: the file's float32 channels (16 B)
+#: and ``GBuffer.from_arrays``' peak (1.6 x its 17-byte output: 27 B), rounded up. The whole
+#: one-frame job measured 68 B a pixel + 1.4 MB (line:9 at 128^2 and 256^2, after a warm-up).
+FRAME_PIXEL = 48
 #: compare's plots and metrics (error maps, thin-feature masks, the gallery's panels) per
 #: kept image, and its figures: an allowance, not measured alone (matplotlib's canvas is
 #: outside tracemalloc's view); the whole compare job is measured with it.
@@ -306,6 +311,24 @@ def render_job_need(quantity: str, *, threads=None) -> Need:
     the outputs."""
     return gbuffer_need(1) + lazy_images_need() + reference_need(quantity, threads=threads) \
         + Need(RENDER_OUTPUT_PIXEL)
+
+
+def estimate_job_need(frames: int, *, flicker_reference: bool = False) -> Need:
+    """``vobscure estimate`` of ``frames`` frames: a frame read while the last is held, the
+    estimator (or, with ``flicker_reference``, the converged screen-space VO, the larger), and
+    with several frames every frame's visibility (and reference) kept and stacked at the end
+    for the flicker (measured: 4 frames with a 64-sample flicker reference, 548-560 B a pixel)."""
+    transient = reference_need("screen") if flicker_reference else estimator_need()
+    kept = 2 * IMAGE_PIXEL * frames * (2 if flicker_reference else 1) if frames > 1 else 0
+    return Need(FRAME_PIXEL + kept) + transient
+
+
+def require_estimate(frames: int, *, flicker_reference: bool, size) -> None:
+    """:func:`require` of :func:`estimate_job_need` with the command's words."""
+    W, H = (int(v) for v in size)
+    require(estimate_job_need(frames, flicker_reference=flicker_reference), size=size,
+            what=f"estimating {frames} frame(s) of {W} x {H}" + (" with a flicker reference" if flicker_reference else ""),
+            reduce="the frames given (--depth)" + (" or --flicker-reference 0" if flicker_reference else ""))
 
 
 def compare_need(*, references, configs: int, radii: int = 1, layers: int = 1, frames: int = 0,
