@@ -371,7 +371,7 @@ def test_damaged_exr_files_are_named_unreadable_not_missing_a_channel(tmp_path, 
 def test_an_exr_larger_than_the_memory_available_is_refused_with_the_numbers(tmp_path, monkeypatch):
     good = tmp_path / "good.exr"
     vio.write_image(good, np.zeros((64, 64), np.float32))
-    monkeypatch.setattr(vio, "_available_memory", lambda: 1024)
+    monkeypatch.setenv("VOBSCURE_MEMORY_LIMIT", "1024")
     with pytest.raises(ValueError, match=r"64 x 64 pixels need up to 16 KiB, and 1 KiB of memory is available"):
         vio.exr_channels(good)
 

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._argv import joined_list_values, numbers_as_written
 from .references import SCREEN_SAMPLES
 
 __all__ = ["main", "render"]
@@ -507,6 +508,7 @@ def _estimate_main(args) -> int:
 
     from . import methods
     from ._io import check_writable_dir
+    from ._memory import require_estimate
     from .convert import NormalsRenormalizedWarning, NormalsRepairedWarning
     from .io import write_image
     from .metrics import flicker
@@ -549,6 +551,8 @@ def _estimate_main(args) -> int:
             totals[key] += int(gb.conversion[key])
         sources.append(gb.conversion["source"])
         H, W = gb.valid.shape
+        if not frames:   # the whole job, refused before the first estimate when it cannot fit
+            require_estimate(len(depth_paths), flicker_reference=many and args.flicker_reference > 0, size=(W, H))
         stages = tqdm(total=3 + args.blur, desc=depth_path.name, leave=False,
                       disable=args.quiet or many or H * W < ESTIMATE_PROGRESS_PIXELS)
         stages.update()
@@ -706,6 +710,7 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     ``camera`` (a :class:`~vobscure.Camera` of ``size``) replaces the scene's view."""
     from . import __version__
     from ._io import check_writable_dir, file_set, save_npz
+    from ._memory import render_job_need, require
     from .experiments.common import default_radius
     from .render import render_gbuffer
     from .groundtruth import ground_truth
@@ -717,6 +722,8 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     cam = sc.camera(tuple(size)) if camera is None else camera
     if radius is None:
         radius = default_radius(sc)
+    require(render_job_need(quantity, threads=threads), size=cam.size, reduce="--size",
+            what=f"rendering a {cam.width} x {cam.height} G-buffer with its ground truth")
     gb = render_gbuffer(sc, cam)
     ref = ground_truth(sc, gb, quantity=quantity, radius=radius, rays=rays, samples=samples,
                           seed=seed, progress=progress, threads=threads, allow_open=allow_open)
@@ -779,53 +786,6 @@ def _visibility_image(vis, valid):
     return img
 
 
-#: Options whose one value is a comma-separated list, which may start with a minus sign
-#: (``--camera -14,2,0,0,1,0``): argparse would take such a value for an option, so it is
-#: passed on as ``--camera=-14,2,0,0,1,0``.
-LIST_OPTIONS = ("--camera",)
-
-
-def _joined_list_values(argv: list[str]) -> list[str]:
-    """``argv`` with each :data:`LIST_OPTIONS` option and a following value that starts with
-    ``-`` and holds a comma joined as ``OPTION=VALUE``."""
-    out = []
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a in LIST_OPTIONS and i + 1 < len(argv) and argv[i + 1].startswith("-") and "," in argv[i + 1]:
-            out.append(f"{a}={argv[i + 1]}")
-            i += 2
-            continue
-        out.append(a)
-        i += 1
-    return out
-
-
-#: Options followed by this many numbers, which may be negative as written (``--eye -14 2 0``,
-#: ``--fov 4e1``): argparse takes a value that starts with a minus sign for an option unless it
-#: is a plain negative number (``-14``, ``-.5``), so each number of these options is passed on
-#: with a leading space (``float`` ignores it, argparse then reads it as a value).
-NUMBER_OPTIONS = {"--eye": 3, "--target": 3, "--up": 3, "--fov": 1}
-
-
-def _numbers_as_written(argv: list[str]) -> list[str]:
-    """``argv`` with the numbers after each :data:`NUMBER_OPTIONS` option marked as values."""
-    out = list(argv)
-    i = 0
-    while i < len(out):
-        count = NUMBER_OPTIONS.get(out[i], 0)
-        i += 1
-        while count and i < len(out):
-            try:
-                float(out[i])
-            except ValueError:
-                break
-            if out[i].startswith("-"):
-                out[i] = " " + out[i]
-            i, count = i + 1, count - 1
-    return out
-
-
 def _error_text(exc: BaseException) -> str:
     """One line for an error: the message of a ValueError; for a file-system error (OSError)
     its reason and the path it names."""
@@ -856,7 +816,7 @@ def main(argv=None) -> int:
 
     parser = _parser()
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
-    args = parser.parse_args(_numbers_as_written(_joined_list_values(argv)))
+    args = parser.parse_args(numbers_as_written(joined_list_values(argv)))
     if args.command is None:
         parser.print_help()
         return 0

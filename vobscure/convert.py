@@ -130,6 +130,7 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
     bg, nonfinite = _background(raw, given, depth_kind, background)
     covered = ~bg
     values = raw[covered]
+    del raw              # the float64 copy of the image is not needed past here: the peak stays the output's
     if is_ndc:
         lo, hi = _RANGES[depth_kind]
         outside = int(np.count_nonzero((values < lo) | (values > hi)))
@@ -138,7 +139,7 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
                              f"pixels; {outside} value(s) do not (min {values.min():.6g}, max "
                              f"{values.max():.6g}). Is depth_kind right, or are they background?")
     z = _linearize(values, depth_kind, near, far, camera,
-                   _view_rays(camera)[covered] if depth_kind == "distance" else None)
+                   _ray_lengths(camera, covered) if depth_kind == "distance" else None)
     bad = ~(np.isfinite(z) & (z > 0))
     if bad.any():
         hint = (" OpenGL eye-space z is negative in front of the camera: pass -z." if
@@ -146,10 +147,11 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
         raise ValueError(f"depth must give a positive finite linear depth on covered pixels; "
                          f"{int(bad.sum())} pixel(s) do not (depth_kind={depth_kind!r}, values like "
                          f"{values[bad][:3].tolist()}).{hint} Mark background with background=...")
-    linear = np.full(raw.shape, np.inf)
+    linear = np.full(given.shape, np.inf)
     linear[covered] = z
+    del values, z
 
-    counts = {"pixels": int(raw.size), "covered": int(covered.sum()), "background": int(bg.sum()),
+    counts = {"pixels": int(given.size), "covered": int(covered.sum()), "background": int(bg.sum()),
               "nonfinite": nonfinite, "renormalized": 0, "flipped": 0, "repaired": 0, "derived": 0,
               "undetermined": 0}
     view_frame = None if view is None else _view_matrix(view, convention)
@@ -165,7 +167,7 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
 
     # -- normals
     if nrm is None:
-        n_view, undetermined = normals_from_depth(camera, linear, covered)
+        n_view, undetermined = normals_from_depth(camera, linear, covered, dtype=dtype)
         counts["derived"] = counts["covered"]
         counts["undetermined"] = undetermined
     else:
@@ -213,7 +215,7 @@ def _back_interval(back_depth, linear, covered, *, camera, depth_kind, near, far
             raise ValueError(f"back_depth (depth_kind={depth_kind!r}) must lie in [{lo}, {hi}] where it is "
                              f"not background; {outside} value(s) do not")
     z = _linearize(values, depth_kind, near, far, camera,
-                   _view_rays(camera)[use] if depth_kind == "distance" else None)
+                   _ray_lengths(camera, use) if depth_kind == "distance" else None)
     bad = ~(z > 0)
     if bad.any():
         raise ValueError(f"back_depth must give a positive linear depth where it is not background; "
@@ -269,8 +271,18 @@ def _view_rays(camera, rows: slice = slice(None)) -> np.ndarray:
     return np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(i), W, 3))
 
 
-def _linearize(raw, kind, near, far, camera, rays):
-    """Linear view depth z from the stored values (covered pixels, flat arrays)."""
+def _ray_lengths(camera, mask) -> np.ndarray:
+    """(n,) lengths of the view rays (:func:`_view_rays`) of the pixels of ``mask``, row-major,
+    made in bands of :data:`NORMAL_BAND_ROWS` rows (no (H, W, 3) image of rays)."""
+    H = mask.shape[0]
+    parts = [np.linalg.norm(_view_rays(camera, rows)[mask[rows]], axis=-1)
+             for rows in (slice(r, min(r + NORMAL_BAND_ROWS, H)) for r in range(0, H, NORMAL_BAND_ROWS))]
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def _linearize(raw, kind, near, far, camera, ray_length):
+    """Linear view depth z from the stored values (covered pixels, flat arrays); ``ray_length``:
+    their view rays' lengths (:func:`_ray_lengths`), for ``kind="distance"``."""
     n, f = near, far
     perspective = camera.is_perspective
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -279,7 +291,7 @@ def _linearize(raw, kind, near, far, camera, rays):
         if kind == "distance":
             if not perspective:
                 return raw.copy()           # parallel rays leave the camera plane: r = z
-            return raw / np.linalg.norm(rays, axis=-1)   # z = r / |(x, y, 1)|
+            return raw / ray_length                      # z = r / |(x, y, 1)|
         if np.isinf(f):
             # the limits f -> inf of the formulas below
             if not perspective:
@@ -388,7 +400,7 @@ def _normals_in_bands(nrm, camera, depth, covered, dtype, *, normal_space, encod
                       f"covered pixels whose length differed from 1 by more than normal_tol={tol:g} "
                       f"(largest difference {worst:.3g})", NormalsRenormalizedWarning, stacklevel=4)
     if k:
-        derived, _ = normals_from_depth(camera, depth, covered)
+        derived, _ = normals_from_depth(camera, depth, covered, dtype=dtype)
         out[missing_all] = derived[missing_all]
         counts["repaired"] = k
         warnings.warn(f"derived {k} zero or NaN normal(s) of covered pixels from the depth "
@@ -453,7 +465,7 @@ def _check_normals(n, covered, rays, tol):
     return out, counts, missing, worst
 
 
-def normals_from_depth(camera, depth, covered, *, rays=None) -> tuple[np.ndarray, int]:
+def normals_from_depth(camera, depth, covered, *, rays=None, dtype=np.float64) -> tuple[np.ndarray, int]:
     """View-space normals of the covered pixels of a linear depth image, and the number of
     pixels whose normal is undetermined.
 
@@ -468,15 +480,25 @@ def normals_from_depth(camera, depth, covered, *, rays=None) -> tuple[np.ndarray
     covered : (H, W) ndarray of bool
         The pixels that show a surface.
     rays : (H, W, 3) array_like, optional
-        The pixels' view rays (not normalized); default the camera's.
+        The pixels' view rays (not normalized); default the camera's, made a band at a time.
+    dtype : numpy float dtype, optional
+        Of the result (default float64); the work is float64 either way.
 
     Returns
     -------
-    normals : (H, W, 3) ndarray of float64
+    normals : (H, W, 3) ndarray of ``dtype``
         Unit normals with ``n . d < 0``; 0 where not covered.
     undetermined : int
         Covered pixels with no covered neighbour along x or along y, whose normal is set to
         face the camera, ``-d / |d|``.
+
+    Notes
+    -----
+    Computed in bands of :data:`NORMAL_BAND_ROWS` rows, each with the two rows above and
+    below it that the differences read (NaN beyond the image, as at its border), so that
+    the float64 temporaries are those of a band, not of the image: the result is the
+    whole image's computation, bit for bit, and the peak memory is the result's plus a
+    band's (``docs/own-buffers.md``, "Memory").
 
     Examples
     --------
@@ -489,20 +511,44 @@ def normals_from_depth(camera, depth, covered, *, rays=None) -> tuple[np.ndarray
     ([0.0, 0.0, -1.0], [0.0, 0.0, 0.0], 0)
     """
     H, W = depth.shape
-    rays = _view_rays(camera) if rays is None else rays
-    P = np.full((H, W, 3), np.nan)
+    out = np.zeros((H, W, 3), dtype=dtype)
+    undetermined = 0
+    for r0 in range(0, H, NORMAL_BAND_ROWS):
+        rows = slice(r0, min(r0 + NORMAL_BAND_ROWS, H))
+        d = _view_rays(camera, rows) if rays is None else rays[rows]
+        out[rows], k = _band_normals(camera, depth, covered, rows, d)
+        undetermined += k
+    return out, undetermined
+
+
+def _band_normals(camera, depth, covered, rows: slice, rays) -> tuple[np.ndarray, int]:
+    """:func:`normals_from_depth` of the image's ``rows`` (h of them): (h, W, 3) float64 and
+    the undetermined count, read from those rows and the two on each side of them."""
+    H, W = depth.shape
+    a, b = rows.start, rows.stop
+    lo, hi = max(a - 2, 0), min(b + 2, H)          # the rows read: the band and its halo
+    h = b - a
+    cov = covered[lo:hi]
+    centers = np.empty((hi - lo, W, 2))
+    centers[..., 0] = np.arange(W, dtype=np.float64)[None, :] + 0.5
+    centers[..., 1] = np.arange(lo, hi, dtype=np.float64)[:, None] + 0.5
+    P_ext = np.full((hi - lo, W, 3), np.nan)
     with np.errstate(invalid="ignore", over="ignore"):
-        P[covered] = camera.unproject(camera.pixel_centers()[covered], depth[covered])
+        P_ext[cov] = camera.unproject(centers[cov], depth[lo:hi][cov])
     # the plane coordinate: affine in the pixel coordinates on any plane
-    w = np.full((H, W), np.nan)
-    w[covered] = 1.0 / depth[covered] if camera.is_perspective else depth[covered]
-    Pp = np.pad(P, ((2, 2), (2, 2), (0, 0)), constant_values=np.nan)
-    wp = np.pad(w, 2, constant_values=np.nan)
+    w_ext = np.full((hi - lo, W), np.nan)
+    w_ext[cov] = 1.0 / depth[lo:hi][cov] if camera.is_perspective else depth[lo:hi][cov]
+    # padded to the band's rows +- 2 and columns +- 2, NaN beyond the image
+    pad_rows = (2 - (a - lo), 2 - (hi - b))
+    Pp = np.pad(P_ext, (pad_rows, (2, 2), (0, 0)), constant_values=np.nan)
+    wp = np.pad(w_ext, (pad_rows, (2, 2)), constant_values=np.nan)
+    P, w = Pp[2:2 + h, 2:2 + W], wp[2:2 + h, 2:2 + W]
+    covered = covered[rows]
 
     def tangent(axis):
         def sh(a, k):   # the neighbour k steps along axis, on the unpadded grid
-            idx = [slice(2, 2 + H), slice(2, 2 + W)]
-            idx[axis] = slice(2 + k, 2 + k + (H, W)[axis])
+            idx = [slice(2, 2 + h), slice(2, 2 + W)]
+            idx[axis] = slice(2 + k, 2 + k + (h, W)[axis])
             return a[tuple(idx)]
         w0, wm1, wm2, wp1, wp2 = w, sh(wp, -1), sh(wp, -2), sh(wp, 1), sh(wp, 2)
         have_f, have_b = np.isfinite(wp1), np.isfinite(wm1)
@@ -522,7 +568,7 @@ def normals_from_depth(camera, depth, covered, *, rays=None) -> tuple[np.ndarray
             a = np.where(central, 0.5, np.where(backward, 1.0, 0.0))
             b = np.where(central, 0.5, np.where(forward, 1.0, 0.0))
             P0, Pm, Pf = P, sh(Pp, -1), sh(Pp, 1)
-            t = np.empty((3, H, W))
+            t = np.empty((3, h, W))
             for c_ in range(3):
                 back_ = np.where(a > 0, P0[..., c_] - Pm[..., c_], 0.0)
                 fore_ = np.where(b > 0, Pf[..., c_] - P0[..., c_], 0.0)

@@ -535,26 +535,12 @@ def _check_exr_size(path, head) -> None:
     if pixels > EXR_MAX_PIXELS:
         raise ValueError(f"not a readable EXR file: {path} (its header claims a data window of {', '.join(sizes)} "
                          f"= {pixels} pixels, more than the {EXR_MAX_PIXELS} this reader accepts; a damaged header?)")
-    available = _available_memory()
+    from ._memory import available_bytes, format_bytes
+
+    available = available_bytes()
     if available is not None and 4 * values > available:
         raise ValueError(f"not a readable EXR file: {path} (its {', '.join(sizes)} pixels need up to "
-                         f"{_bytes(4 * values)}, and {_bytes(available)} of memory is available)")
-
-
-def _bytes(n: int) -> str:
-    """A byte count for people: ``16 KiB``, ``37.3 GiB``."""
-    for unit in ("B", "KiB", "MiB", "GiB"):
-        if n < 1024 or unit == "GiB":
-            return f"{n:.3g} {unit}" if unit != "B" else f"{n} B"
-        n /= 1024
-
-
-def _available_memory() -> int | None:
-    """Bytes of physical memory available now (None where the system does not say)."""
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
+                         f"{format_bytes(4 * values)}, and {format_bytes(available)} of memory is available)")
 
 
 def _exr_cached(path, cache) -> dict:

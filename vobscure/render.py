@@ -64,7 +64,10 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
     peeling, when the bands' temporaries are gone, and are the float64 depths' intervals
     rounded to float32 (relative 6e-8 of the depth; how the estimators read them:
     ``docs/layers.md``, "Memory"). ``benchmarks/bench_layers.py`` measures the peak. Time:
-    one more Embree query per layer, on the rays still going.
+    one more Embree query per layer, on the rays still going. A request whose estimated peak
+    (:func:`vobscure._memory.gbuffer_need`) exceeds the memory available is refused before
+    any work with a ValueError (:class:`vobscure._memory.MemoryBudgetError`) that says what it
+    needs and the largest size that fits (``docs/compare.md``, "Memory").
 
     A surface closer than the tracer's offset (1e-5 of the scene's scale) behind a hit is not
     seen: of two faces that touch (a box standing on a floor) the peeling finds one, which
@@ -92,6 +95,7 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
     """
     from .camera import Camera
     from .scenes import as_scene
+    from ._memory import gbuffer_need, require
     from ._validate import check_int
     from .raytrace import CHUNK_RAYS, default_threads, parallel_map
 
@@ -101,6 +105,9 @@ def render_gbuffer(scene, camera, *, layers: int = 1, guard: int = 0) -> GBuffer
     K = check_int(layers, "layers")
     inner_camera, camera, guard = _widen(camera, guard)
     H, W = camera.height, camera.width
+    # refused before any work when the result and its temporaries cannot fit (docs/compare.md, "Memory")
+    require(gbuffer_need(K), size=(W, H), what=f"rendering a {W} x {H} G-buffer" + (f" of {K} layers" if K > 1 else ""),
+            reduce="the camera's size" + (" or layers" if K > 1 else ""))
     depth = np.full(H * W, np.inf)
     normal = np.zeros((H * W, 3))
     valid = np.zeros(H * W, dtype=bool)

@@ -424,7 +424,16 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         camera = sc.camera(size)
     from ..render import render_gbuffer
     from ..scenes.viewpoint import view_diagnostics, view_warnings
+    from .._memory import compare_need, count_items, require
 
+    # the whole job's estimated peak, refused before any work when it cannot fit
+    n_frames = (len(cameras) if cameras is not None else frames) if frames > 1 or cameras is not None else 0
+    require(compare_need(references=references, configs=len(configs),
+                         layers=(layers or 1) if thickness == "layers" and not frame else 1, radii=1 if radii is None else len(np.atleast_1d(radii)), frames=n_frames,
+                         frame_configs=len(configs) * count_items(schedules) * count_items(accumulate),
+                         orbit=orbit, plots=write and plots, pixels=camera.width * camera.height),
+            size=camera.size, what=f"comparing on a {camera.width} x {camera.height} image",
+            reduce="size (--size), the references, methods, radii or frames")
     t_view = time.perf_counter()
     view_gb = sc if frame else render_gbuffer(sc, camera)     # a frame is its own view
     if not view_gb.valid.any():
