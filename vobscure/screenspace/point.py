@@ -7,7 +7,7 @@ in ``docs/screenspace.md``, "How the paper is cited").
 
 from __future__ import annotations
 
-from functools import partial
+from functools import lru_cache, partial
 
 import numpy as np
 
@@ -467,12 +467,84 @@ def _stratified_square(rng, n: int) -> np.ndarray:
     return (ij + rng.random((n, 2))) / q
 
 
+#: Above this many points per group the lattice generator is searched near n / golden ratio
+#: only (the Fibonacci lattice's generator; a full search costs n^2 operations).
+LATTICE_FULL_SEARCH = 2048
+#: Candidates on each side of round(n / golden ratio) in the restricted search.
+LATTICE_WINDOW = 256
+
+
+@lru_cache(maxsize=64)
+def lattice_generator(n: int) -> int:
+    """The generator z of the rank-1 lattice {(i / n, frac(i z / n)), i = 0..n-1} whose
+    points lie farthest apart on the torus (the largest shortest nonzero lattice vector,
+    toroidal Euclidean length), among the z coprime to n: all of them up to
+    :data:`LATTICE_FULL_SEARCH` points, else :data:`LATTICE_WINDOW` on each side of
+    n / golden ratio (the generator F_(k-1) of the Fibonacci lattice of n = F_k points lies
+    there). The first best z wins ties.
+
+    Examples
+    --------
+    For 89 = F_11 points the best is 34 = 89 - F_10, the Fibonacci lattice reflected:
+
+    >>> lattice_generator(89), lattice_generator(100)
+    (34, 9)
+    """
+    n = int(n)
+    if n <= 2:
+        return 1
+    if n <= LATTICE_FULL_SEARCH:
+        candidates = np.arange(1, n)
+    else:
+        g = int(round(n / ((1.0 + np.sqrt(5.0)) / 2.0)))
+        candidates = np.arange(max(1, g - LATTICE_WINDOW), min(n, g + LATTICE_WINDOW + 1))
+    candidates = candidates[np.gcd(candidates, n) == 1]
+    i = np.arange(1, n)
+    x = np.minimum(i, n - i).astype(np.float64) ** 2
+    best, best_z = -1.0, 1
+    for z in candidates.tolist():
+        y = (i * z) % n
+        d = float(np.min(x + np.minimum(y, n - y).astype(np.float64) ** 2))
+        if d > best:
+            best, best_z = d, z
+    return best_z
+
+
+def _lattice_square(rng, n: int) -> np.ndarray:
+    """(n, 2) points of the unit square: the rank-1 lattice of :func:`lattice_generator`,
+    shifted as a whole by one uniform random vector modulo 1 (a Cranley-Patterson rotation),
+    so that every point is uniform in the square.
+
+    The segment integrand of :func:`vo_reference` vanishes on the edge of the box of rays
+    (those rays only touch the ball), so its periodic extension is continuous, where a
+    randomly shifted lattice rule converges faster than a jittered grid: inside the Cornell
+    box and the atrium (320 x 180, 800 rays) the mean reported standard error over the pixels
+    that are not exact fell from 0.0028 and 0.0034 with 10 x 10 jittered cells per group to
+    0.0015 and 0.0017 with the 100-point lattice (``docs/screenspace.md``, "The converged
+    reference").
+
+    References
+    ----------
+    Cranley & Patterson, "Randomization of number theoretic methods for multiple
+    integration", SIAM J. Numer. Anal. 13(6), 1976 (the random shift); Sloan & Joe,
+    "Lattice Methods for Multiple Integration", Oxford 1994, Ch. 4 (rank-1 lattice rules).
+    """
+    k = np.arange(n)
+    z = lattice_generator(n)
+    lattice = np.column_stack([k / n, (k * z % n) / n])
+    u = lattice + rng.random(2)
+    return u - np.floor(u)
+
+
 def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, seed, fetch, offscreen,
-               groups, progress, along: str, fast: bool = True, shortcut: bool = True):
+               groups, progress, along: str, fast: bool = True, shortcut: bool = True, lattice: bool = True):
     """:func:`vo_reference`; ``along="point"`` tests each stratified point on its own instead of
     integrating its view-ray segment (the same expectation, more variance: the independent
     check of the tests); ``shortcut=False`` integrates the segments of the pixels that see only
-    their own plane too (the same values: the tests' check of the shortcut)."""
+    their own plane too (the same values: the tests' check of the shortcut); ``lattice=False``
+    draws each group's rays on a jittered grid (:func:`_stratified_square`) instead of the
+    shifted lattice (:func:`_lattice_square`): the same expectation, more variance (the
+    benchmark's and the tests' comparison)."""
     from tqdm.auto import tqdm
 
     pattern = samples if isinstance(samples, SamplePattern) else None
@@ -500,7 +572,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
             pts = cube_to_uniform_ball((ijk + rng.random((half, 3))) / cells)
             points = np.vstack([pts, -pts])
         if pattern is None and along == "segment":
-            x = _ray_vo(gbuffer, radius=radius, unit=_stratified_square(rng, total // g), normal_clamp=normal_clamp,
+            unit = (_lattice_square if lattice else _stratified_square)(rng, total // g)
+            x = _ray_vo(gbuffer, radius=radius, unit=unit, normal_clamp=normal_clamp,
                         thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen,
                         fast=fast, planes=planes)
         else:
