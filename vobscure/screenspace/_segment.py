@@ -88,7 +88,7 @@ def ball_box(px, radius):
 def ray_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, fetch, offscreen, shift):
     """Segment-integrated VO of one chunk of pixels for one group of rays.
 
-    ``unit`` (n, 2): stratified points of the unit square, moved by the pixel's toroidal
+    ``unit`` (n, 2): points of the unit square (each uniform in it), moved by the pixel's toroidal
     ``shift`` ((k, 2), uniform in the square: a Cranley-Patterson rotation), mapped
     uniformly to the box :func:`ball_box` of rays through the ball. With A the box's area,
     A / n sum_i int_occ J rho estimates the occupied weighted volume without bias, and
