@@ -15,8 +15,11 @@ def test_render_writes_images_and_npz(tmp_path, capsys):
     status = cli.main(["render", "--scene", "crease", "--size", "24", "16", "--rays", "32",
                        "--radius", "0.5", "--seed", "3", "--out", str(tmp_path), "--quiet"])
     assert status == 0
-    names = sorted(p.name for p in tmp_path.iterdir())
+    names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
     assert names == ["crease_ao.npz", "crease_ao_depth.png", "crease_ao_normal.png", "crease_ao_visibility.png"]
+    # beside them only the set's manifest and the folder's lock (vobscure._io.file_set)
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == [".crease_ao.files.json",
+                                                                                    ".vobscure.lock"]
     with np.load(tmp_path / "crease_ao.npz") as data:
         prov = json.loads(str(data["provenance"]))
         vis, valid, depth = data["visibility"], data["valid"], data["depth"]

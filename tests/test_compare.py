@@ -35,7 +35,8 @@ def first_run(tmp_path_factory):
 
 def test_files_and_rows(first_run):
     _, out, _ = first_run
-    assert sorted(p.name for p in out.iterdir()) == sorted(FILES)      # no temporary files left
+    # no temporary files left; beside the set only its manifest and the folder's lock
+    assert sorted(p.name for p in out.iterdir()) == sorted(FILES + (".compare.files.json", ".vobscure.lock"))
     rows = _rows(out / "results.csv")
     assert [(r["method"], r["samples"]) for r in rows] == [("line", "5"), ("point", "12"), ("area", "1")]
     # costs: the registry's, per method (points 4 texels a tap, lines 1, area 18 per lookup)
@@ -56,6 +57,17 @@ def test_files_and_rows(first_run):
     assert "## Verdict" in md and "ao_rmse (model error)" in md and "volumetric_rmse (model error)" not in md
     summary = json.loads((out / "summary.json").read_text())
     assert summary["text"] and summary["text"][0].startswith("Against the ray-cast world-space VO")
+
+
+def test_every_row_carries_flip_per_reference(first_run):
+    _, out, _ = first_run
+    rows = _rows(out / "results.csv")
+    for r in rows:
+        for ref in ("screen", "volumetric", "ao"):
+            assert 0 < float(r[f"{ref}_flip"]) < 1
+    header = next(line for line in (out / "results.md").read_text().splitlines() if line.startswith("| label"))
+    assert "| screen_flip |" in header and "ao_flip (model error)" in header
+    assert C.METRICS[-1] == "flip"
 
 
 def test_second_run_hits_the_cache_with_identical_numbers(first_run, tmp_path):
@@ -82,12 +94,11 @@ def test_interrupted_run_keeps_the_previous_files(first_run, monkeypatch):
     monkeypatch.setattr(C, "_gallery", boom)
     with pytest.raises(KeyboardInterrupt):
         main(argv)
-    after = {p.name for p in out.iterdir()}
+    after = {p.name for p in out.iterdir() if not p.name.startswith(".")}
     assert after == set(FILES)                       # nothing partial beside them
-    # files written before the interruption were replaced whole, the rest untouched
-    assert (out / "gallery.png").read_bytes() == before["gallery.png"]
-    assert (out / "provenance.json").read_bytes() == before["provenance.json"]
-    assert len(_rows(out / "results.csv")) == 3      # complete, parseable
+    assert not [p for p in out.iterdir() if p.name.endswith(".part")]
+    # the set is replaced as a whole or not at all: every file is the previous run's
+    assert {name: (out / name).read_bytes() for name in FILES} == before
 
 
 def test_only_requested_references_are_computed(tmp_path, monkeypatch):
@@ -115,6 +126,8 @@ def test_orbit_measures_flicker(tmp_path):
         # change can be of either sign but never exceeds the raw change
         assert np.isfinite(row["flicker"]) and row["flicker_raw"] > 0
         assert row["flicker"] <= row["flicker_raw"]
+        # frames that change are perceptibly different to FLIP (0 only for identical frames)
+        assert 0 < row["flicker_flip"] <= 1
 
 
 def test_orbit_cameras_turn_about_the_target():

@@ -284,7 +284,7 @@ def test_a_truncated_or_wrong_file_is_named(tmp_path, capsys):
     (tmp_path / "cut.exr").write_bytes(data[: len(data) // 2])
     status, _, err = _run(capsys, "--depth", tmp_path / "cut.exr", "--fov", 50, "--radius", RADIUS,
                           "--out", tmp_path / "vo.exr")
-    assert status == 2 and f"{tmp_path / 'cut.exr'}: not a readable OpenEXR file" in err
+    assert status == 2 and f"not a readable EXR file: {tmp_path / 'cut.exr'} (" in err
     normal = blender_frames.DIR / "single" / "frameNormal.exr"
     status, _, err = _run(capsys, "--depth", normal, "--fov", 50, "--radius", RADIUS, "--out", tmp_path / "vo.exr")
     assert status == 2 and f"{normal}: no depth channel" in err and "the file has the channels A, X, Y, Z" in err

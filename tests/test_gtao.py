@@ -1,4 +1,5 @@
-"""GTAO (Jimenez et al. 2016): planes, the orthographic crease, the ray-cast AO, extremes."""
+"""GTAO (Jimenez et al. 2016): planes (a level camera among them), the orthographic crease, the
+ray-cast AO, float32 (the Cornell box among them), extremes."""
 
 from __future__ import annotations
 
@@ -41,6 +42,18 @@ BENT_CREASE_TOL_DEG = 1.2
 #: in float64 after that). Measured max 9e-7 (orthographic crease), 4e-7 (perspective);
 #: acos near 1 amplifies a rounding of the horizon cosine, hence 10x the measured.
 FLOAT32_TOL = 1e-5
+#: Bent normals, float32 against float64 per component (the cosine of their angle is too close
+#: to 1 for acos to resolve it): measured max 1.1e-6 on the Cornell box; 10x as FLOAT32_TOL.
+BENT_FLOAT32_TOL = 1e-5
+#: The probe's slab (its edges in view) from a level camera and from one tilted by 0.02 degrees:
+#: the two images differ by the tilt's 0.02-pixel shift; measured difference of the means 1.4e-5
+#: (3 slices). 1e-3 is 70x that and 70x below what a level floor read as occluded would show.
+TILT_MEAN_TOL = 1e-3
+
+#: A camera 1 unit above the slab's top (y = 0) looking level (view-space n_z = 0 at every
+#: floor pixel), and the same camera tilted down by atan(0.001 / 3) = 0.02 degrees.
+LEVEL_EYE = (0.0, 1.0, 3.0)
+LEVEL_TARGETS = {"level": (0.0, 1.0, 0.0), "tilted": (0.0, 0.999, 0.0)}
 
 
 VIEWS = {
@@ -265,3 +278,56 @@ def test_step_jitter_r1_is_xegtaos_and_optional(crease_view):
         gtao(gb, radius=0.5, step_jitter="golden")
     with pytest.raises(ValueError, match="step_jitter"):
         gtao_bent_normals(gb, radius=0.5, step_jitter="R1")
+
+
+def test_unclipped_one_slice_frames_average_to_the_integral():
+    # An open plane seen obliquely: GTAO's integral is 1. One slice per frame at a random angle
+    # is unbiased only unclipped (a slice's estimate can exceed 1); clipped frames average darker.
+    # Frames are independent (white noise per frame): a z-test on the mean of the frames' means.
+    cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(16, 16), fov_y=40)
+    gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+    frames = 64
+    for clip in (False, True):
+        means = np.array([np.nanmean(gtao(gb, radius=0.3, slices=1, frame=n, clip=clip)) for n in range(frames)])
+        z = (means.mean() - 1.0) / (means.std(ddof=1) / np.sqrt(frames))
+        if clip:
+            assert z < -5.0
+        else:
+            assert abs(z) < 3.29          # two-sided, false-failure rate 1e-3
+
+
+def test_level_camera_reads_an_open_plane_open(big_slab):
+    """A floor seen by a level camera has n_z = 0 in view space at every pixel; GTAO's slices
+    go through the view vector, so nothing divides by n_z: the plane reads open within the
+    grazing-view tolerance at 9 slices (the floor is grazing far away), its bent normal is the
+    normal, and the probe's slab reads as from a camera tilted by 0.02 degrees."""
+    means = {}
+    for name, target in LEVEL_TARGETS.items():
+        cam = vo.Camera.look_at(LEVEL_EYE, target, size=(64, 64), fov_y=60)
+        gb = vo.render_gbuffer(big_slab, cam)
+        if name == "level":
+            assert np.all(gb.normal[..., 2][gb.valid] == 0.0)
+        inside = interior(gb, 0.3)
+        assert inside.sum() > 1000
+        v = gtao(gb, radius=0.3, slices=9, steps=3)
+        assert np.max(np.abs(v[inside] - 1.0)) < GRAZING_PLANE_TOL, name
+        b = gtao_bent_normals(gb, radius=0.3, seed=1)
+        assert np.max(_angle_deg(b, gb.normal)[inside]) < BENT_PLANE_TOL_DEG, name
+        small = vo.render_gbuffer(vo.scenes.slab(), cam)
+        means[name] = np.nanmean(gtao(small, radius=0.3))
+    assert abs(means["level"] - means["tilted"]) < TILT_MEAN_TOL
+
+
+def test_float32_agrees_on_the_cornell_box():
+    """The Cornell box seen head-on: walls, floor and ceiling with n_z = 0 in view space;
+    float32 and float64 G-buffers agree within float32's rounding, visibility and bent
+    normals."""
+    scene = vo.scenes.cornell_box()
+    gb = vo.render_gbuffer(scene, scene.camera((64, 64)))
+    g32 = gb.astype(np.float32)
+    assert np.sum(gb.normal[..., 2][gb.valid] == 0.0) > 1000
+    v64, v32 = gtao(gb, radius=0.5), gtao(g32, radius=0.5)
+    assert v32.dtype == np.float32
+    np.testing.assert_allclose(v32[gb.valid].astype(np.float64), v64[gb.valid], rtol=0, atol=FLOAT32_TOL)
+    b64, b32 = gtao_bent_normals(gb, radius=0.5), gtao_bent_normals(g32, radius=0.5)
+    np.testing.assert_allclose(b32[gb.valid].astype(np.float64), b64[gb.valid], rtol=0, atol=BENT_FLOAT32_TOL)

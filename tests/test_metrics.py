@@ -49,7 +49,9 @@ def test_empty_and_small():
     r = vo.error(np.full((4, 4), np.nan), np.zeros((4, 4)))
     assert r.pixels == 0 and r.ignored == 16 and np.isnan(r.rmse)
     r = vo.error(np.array([0.5]), np.array([0.25]))
-    assert r.rmse == 0.25 and np.isnan(r.ssim)
+    assert r.rmse == 0.25 and np.isnan(r.ssim) and np.isnan(r.flip)
+    r = vo.error(np.full((4, 4), np.nan), np.zeros((4, 4)))
+    assert np.isnan(r.flip)
 
 
 def test_bad_inputs():
@@ -154,6 +156,7 @@ def test_flicker_known_sequences():
     constant = np.repeat(base[None], 7, axis=0)
     f = vo.metrics.flicker(constant)
     assert f.value == 0 and f.estimate_change == 0 and np.isnan(f.reference_change)
+    assert f.estimate_flip == 0 and np.isnan(f.reference_flip)
     assert f.pairs == 6 * 30 and f.ignored == 0
     d = 0.05
     steps = base[None] + d * (np.arange(7) % 2)[:, None, None]      # x, x + d, x, x + d, ...

@@ -611,7 +611,8 @@ def test_public_names_and_no_private_imports_between_modules():
     root = Path(P.__file__).resolve().parents[1]
     for path in root.rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.level > 0 and "patterns" in (node.module or "") + str(path):
+            if (isinstance(node, ast.ImportFrom) and node.level > 0
+                    and "patterns" in (node.module or "") + path.relative_to(root).as_posix()):
                 private = [a.name for a in node.names if a.name.startswith("_")]
                 assert not private, f"{path.relative_to(root)} imports {private} from {node.module}"
 
@@ -631,3 +632,210 @@ def test_patterns_are_symmetric_with_footnote5_weights():
     q = P.ball(12)
     assert q.is_symmetric and q.points.shape == (12, 3)
 
+
+
+# --- untabulated sizes: the quick generator and the limits ------------------------------------
+
+from vobscure.patterns import electrostatic as E  # noqa: E402
+from vobscure.patterns import quick as Q  # noqa: E402
+
+#: Quality of a quick pattern against the best table entry of the same count, or of the
+#: largest tabulated count below it: at most this factor (measured, 4096 trials: 0.89-1.21 at
+#: the same count, 0.31-1.01 against a smaller one), allowing the quick pattern's own stderr.
+QUICK_QUALITY_FACTOR = 1.5
+#: Trials of those quality evaluations (stderr 2-4 %).
+QUICK_QUALITY_TRIALS = 4096
+
+
+class _Counter:
+    """Wraps electrostatic._repulsion: counts the calls and records the largest count n seen."""
+
+    def __init__(self, fn):
+        self.fn, self.calls, self.largest = fn, 0, 0
+
+    def __call__(self, layout, free):
+        self.calls += 1
+        self.largest = max(self.largest, layout.n)
+        return self.fn(layout, free)
+
+
+@pytest.fixture
+def repulsion_counter(monkeypatch):
+    counter = _Counter(E._repulsion)
+    monkeypatch.setattr(E, "_repulsion", counter)
+    Q._quick.cache_clear()
+    T.clear_caches()
+    yield counter
+    Q._quick.cache_clear()
+
+
+def _refinement_calls(steps: int) -> int:
+    """Upper bound on the repulsion evaluations of a relaxation of ``steps`` steps: two at the
+    start (the first charge, the first forces), one per step, one per charge update."""
+    return 2 + steps + steps // E.ELECTROSTATIC["charge_every"] + 1
+
+
+def test_estimator_sizes_no_table_holds_run_a_bounded_refinement(repulsion_counter, slab):
+    import vobscure as vo
+    from vobscure.screenspace import _common as C
+
+    cam = vo.Camera.look_at((0, 2, 0.5), (0, 0, 0), size=(16, 16), fov_y=40.0)
+    gb = vo.render_gbuffer(slab, cam)
+    C._default_pattern.cache_clear()
+    try:
+        for estimator, dim, samples in (("vo_line", 2, 34), ("vo_line", 2, 100), ("vo_line", 2, 200),
+                                        ("vo_point", 3, 200), ("vo_point", 3, 500)):
+            before = repulsion_counter.calls
+            v = getattr(vo, estimator)(gb, radius=0.3, samples=samples)
+            assert np.isfinite(v).any()
+            p = (disk if dim == 2 else ball)(samples)
+            ref = p.provenance["refinement"]
+            assert p.method == "quick" and p.provenance["selection"]["rule"] == "no table holds n: quick"
+            layout = Q.Layout(dim, samples, True, samples % 2 == 1)
+            assert ref["steps_budget"] == Q.refinement_steps(layout) <= Q.REFINE_STEPS
+            assert ref["steps_budget"] * layout.free * samples <= Q.PAIR_BUDGET
+            assert ref["steps_done"] <= ref["steps_budget"]
+            # the O(n^2) repulsion ran within the budget (the second disk() call is cached)
+            assert repulsion_counter.calls - before <= _refinement_calls(ref["steps_budget"])
+            assert ref["skipped"] == (samples > Q.REFINE_MAX[dim])
+    finally:
+        C._default_pattern.cache_clear()
+
+
+@pytest.mark.parametrize("dim,n", [(2, 130), (2, 1000), (3, 513), (3, 10_000), (2, Q.SAMPLES_LIMIT)])
+def test_above_the_refinement_limit_the_quadratic_repulsion_is_never_called(repulsion_counter, dim, n):
+    p = (disk if dim == 2 else ball)(n)
+    assert repulsion_counter.calls == 0
+    assert p.provenance["refinement"] == {"steps_budget": 0, "steps_done": 0, "skipped": True}
+    assert p.provenance["weights"].startswith("spiral bands")
+
+
+def test_a_budget_below_the_minimum_skips_the_refinement(repulsion_counter, monkeypatch):
+    monkeypatch.setattr(Q, "PAIR_BUDGET", 19 * 17 * 34)          # 19 steps at n = 34
+    p = disk(34)
+    assert p.provenance["refinement"]["skipped"] and repulsion_counter.calls == 0
+
+
+def test_the_repulsion_in_blocks_equals_a_direct_evaluation(monkeypatch):
+    """Forces and energy against scipy's cdist, with blocks of a few rows and in one block."""
+    from scipy.spatial.distance import cdist
+
+    rng = np.random.default_rng(3)
+    for dim, n, symmetric, center in ((2, 41, True, True), (3, 30, False, False), (3, 17, False, True)):
+        layout = Q.Layout(dim, n, symmetric, center)
+        free = 0.9 * to_ball(rng, layout.free, dim)
+        full = layout.full(free)
+        d = cdist(full, full)
+        np.fill_diagonal(d, np.inf)
+        energy = 0.5 * np.sum(d ** -3.0) / 3.0                       # sum over pairs of 1 / (3 d^3)
+        i = layout.self_index()
+        diff = full[i][:, None, :] - full[None, :, :]
+        force = np.sum(diff / d[i][:, :, None] ** 5, axis=1)
+        for chunk in (E.PAIR_CHUNK, 3 * n, n):
+            monkeypatch.setattr(E, "PAIR_CHUNK", chunk)
+            f, e = E._repulsion(layout, free)
+            np.testing.assert_allclose(f, force, rtol=1e-12)
+            assert e == pytest.approx(energy, rel=1e-12)
+
+
+def to_ball(rng, count, dim):
+    x = rng.normal(size=(count, dim))
+    return x / np.linalg.norm(x, axis=1, keepdims=True) * rng.random((count, 1)) ** (1.0 / dim)
+
+
+@pytest.mark.parametrize("dim,n", [(2, 34), (2, 99), (2, 1001), (3, 41), (3, 600), (2, Q.SAMPLES_LIMIT)])
+def test_quick_patterns_are_valid_in_every_variant(dim, n):
+    fn = disk if dim == 2 else ball
+    for symmetric, center in ((True, None), (False, False), (False, True)):
+        p = fn(n, symmetric=symmetric, center=center)
+        assert p.method == "quick" and p.points.shape == (n, dim)
+        assert np.all(np.sum(p.points ** 2, axis=1) < 1.0)
+        assert p.weights.sum() == pytest.approx(1.0, abs=EXACT_TOL) and np.all(p.weights > 0)
+        assert p.is_symmetric == symmetric
+        assert p.has_center == (n % 2 == 1 if symmetric else center)
+        assert p.provenance["seed"] is None                           # deterministic
+    # the seed is validated and not used
+    assert np.array_equal(fn(n, seed=7).points, fn(n).points)
+    with pytest.raises(ValueError, match="seed"):
+        fn(n, seed=-1)
+
+
+def test_band_weights_are_the_footnote5_mass_of_each_annulus():
+    """Disk: the integral of 2 sqrt(1 - r^2) over each point's equal-area annulus, by
+    quadrature; ball: equal volume shares."""
+    n = 7
+    layout = Q.Layout(2, n, False, True)
+    total = integrate.quad(lambda r: 2 * np.sqrt(1 - r * r) * 2 * np.pi * r, 0, 1)[0]
+    radii = np.sqrt(np.arange(n + 1) / n)                         # annulus k: r in [radii[k], radii[k + 1]]
+    mass = [integrate.quad(lambda r: 2 * np.sqrt(1 - r * r) * 2 * np.pi * r, radii[k], radii[k + 1])[0]
+            for k in range(n)]
+    np.testing.assert_allclose(Q.band_weights(layout), np.array(mass) / total, rtol=QUADRATURE_TOL)
+    # symmetric, even: the pair j shares annuli 2j and 2j + 1
+    w = Q.band_weights(Q.Layout(2, 6, True, False))
+    pair = [integrate.quad(lambda r: 2 * np.sqrt(1 - r * r) * 2 * np.pi * r, np.sqrt(2 * j / 6),
+                           np.sqrt((2 * j + 2) / 6))[0] / total / 2 for j in range(3)]
+    np.testing.assert_allclose(w, np.repeat(pair, 2), rtol=QUADRATURE_TOL)
+    np.testing.assert_allclose(Q.band_weights(Q.Layout(3, 9, True, True)), np.full(9, 1 / 9), rtol=0)
+    # the band weights of the spiral's points agree with their Voronoi weights where the regions
+    # are many grid cells wide: the mass outside r = 0.7 of a 60-point spiral
+    pts = G.generate(2, 60, "spiral", False, False, 0).points
+    outer = np.sum(pts * pts, axis=1) > 0.49
+    bands = Q.band_weights(Q.Layout(2, 60, False, False))
+    assert bands[outer].sum() == pytest.approx(P.voronoi_weights(pts)[outer].sum(), abs=0.01)
+
+
+@pytest.mark.parametrize("dim,n,tabulated", [
+    (2, 64, 64), (2, 128, 128), (3, 128, 128), (2, 257, 257),          # the same count
+    (2, 34, 33), (2, 300, 257), (3, 41, 40), (3, 200, 129), (3, 600, 257),   # the next below
+])
+def test_quick_quality_is_within_a_factor_of_the_tables(dim, n, tabulated):
+    domain = "disk" if dim == 2 else "ball"
+    best = min(t[tabulated].provenance["quality"] for m in P.METHODS
+               if tabulated in (t := P.load_table(domain, m)))
+    q = quality(Q.quick_pattern(dim, n, True, n % 2 == 1), trials=QUICK_QUALITY_TRIALS)
+    assert q.value - _crit() * q.stderr <= QUICK_QUALITY_FACTOR * best
+
+
+def test_tabulated_patterns_are_the_table_files_bit_for_bit():
+    """The defaults at every tabulated count are the arrays in the .npz files, read directly."""
+    import json
+
+    for domain, fn in (("disk", disk), ("ball", ball)):
+        chosen = {}
+        for method in P.METHODS:
+            with np.load(P.TABLE_DIR / f"{domain}_{method}_symmetric.npz", allow_pickle=False) as z:
+                prov = json.loads(str(z["provenance"]))
+                for i, n in enumerate(z["counts"].tolist()):
+                    a, b = z["offsets"][i], z["offsets"][i + 1]
+                    q = prov["entries"][str(n)]["quality"]
+                    if n not in chosen or q < chosen[n][0]:
+                        chosen[n] = (q, z["points"][a:b].copy(), z["weights"][a:b].copy())
+        assert len(chosen) == T.TABLE_N[2 if domain == "disk" else 3] + len(P.TABLE_EXTRA_N)
+        for n, (_, points, weights) in chosen.items():
+            p = fn(n)
+            assert p.method != "quick"
+            assert np.array_equal(p.points, points) and np.array_equal(p.weights, weights), (domain, n)
+
+
+@pytest.mark.parametrize("call,match", [
+    (lambda: disk(Q.SAMPLES_LIMIT + 1), r"n must be at most 65536 .* got 65537.*vo_reference"),
+    (lambda: ball(10 ** 6, method="random"), r"n must be at most 65536 .* got 1000000.*vo_reference"),
+    (lambda: disk(258, method="electrostatic"), r"n must be at most 257 for method='electrostatic'.*'quick'"),
+    (lambda: ball(1000, method="lloyd"), r"n must be at most 257 for method='lloyd'"),
+    (lambda: disk(300, method="poisson", symmetric=False), r"n must be at most 257 for method='poisson'"),
+])
+def test_counts_beyond_the_limits_are_refused(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_an_estimator_asked_for_too_many_samples_refuses_before_any_work(slab, monkeypatch):
+    import vobscure as vo
+
+    cam = vo.Camera.look_at((0, 2, 0.5), (0, 0, 0), size=(4, 4), fov_y=40.0)
+    gb = vo.render_gbuffer(slab, cam)
+    monkeypatch.setattr(G, "generate", None)                      # no generator may run
+    for call in (lambda: vo.vo_point(gb, radius=0.3, samples=10 ** 5),
+                 lambda: vo.vo_line(gb, radius=0.3, samples=10 ** 6)):
+        with pytest.raises(ValueError, match="samples.*vo_reference"):
+            call()

@@ -1,5 +1,6 @@
-"""VBAO (Therrien et al. 2023): planes, the orthographic crease, the GTAO limit, solid
-intervals, extremes, float32 and argument errors."""
+"""VBAO (Therrien et al. 2023): planes (a level camera among them), the orthographic crease, the
+GTAO limit, solid intervals, extremes, float32 (the Cornell box among them) and argument
+errors."""
 
 from __future__ import annotations
 
@@ -44,6 +45,19 @@ FLOAT32_TOL = 1e-5
 #: The fraction of pixels where such a flip may happen (angles within ~1e-7 rad of one of 32
 #: sector centres of a slice: of the order of 1e-5 per tap; a few in 1e3 allowed).
 FLOAT32_FLIP_FRACTION = 5e-3
+#: Grazing views of a plane at 9 slices, as GTAO's (tests/test_gtao.py, GRAZING_PLANE_TOL):
+#: the slice integrand is clipped near the hemisphere's edge; a level camera's far floor is
+#: grazing (measured worst pixel 0.9929).
+GRAZING_PLANE_TOL = 1e-2
+#: The probe's slab (its edges in view) from a level camera and from one tilted by 0.02 degrees:
+#: the two images differ by the tilt's 0.02-pixel shift; measured difference of the means 1.4e-5
+#: (3 slices). 1e-3 is 70x that and 70x below what a level floor read as occluded would show.
+TILT_MEAN_TOL = 1e-3
+
+#: A camera 1 unit above the slab's top (y = 0) looking level (view-space n_z = 0 at every
+#: floor pixel), and the same camera tilted down by atan(0.001 / 3) = 0.02 degrees.
+LEVEL_EYE = (0.0, 1.0, 3.0)
+LEVEL_TARGETS = {"level": (0.0, 1.0, 0.0), "tilted": (0.0, 0.999, 0.0)}
 
 
 def _interior(gb, radius):
@@ -323,3 +337,43 @@ def test_sector_weights_against_quadrature_and_the_byte_tables():
             got = _Weights(S, weighting).open_weight(mask, sl)
             want = (open_ * sector_weights(gamma, S, weighting)).sum(axis=1)
             np.testing.assert_allclose(got, want, rtol=0, atol=1e-13)
+
+
+def test_level_camera_reads_an_open_plane_open(big_slab):
+    """A floor seen by a level camera has n_z = 0 in view space at every pixel; VBAO's slices
+    go through the view vector, so nothing divides by n_z: the plane reads open within the
+    grazing-view tolerance at 9 slices, exactly 1 under the uniform and bit-count weightings
+    (no tap on a plane marks a sector), and the probe's slab reads as from a camera tilted by
+    0.02 degrees."""
+    means = {}
+    for name, target in LEVEL_TARGETS.items():
+        cam = vo.Camera.look_at(LEVEL_EYE, target, size=(64, 64), fov_y=60)
+        gb = vo.render_gbuffer(big_slab, cam)
+        if name == "level":
+            assert np.all(gb.normal[..., 2][gb.valid] == 0.0)
+        inside = _interior(gb, 0.3)
+        assert inside.sum() > 1000
+        for thickness in (0.1, np.inf):
+            v = vbao(gb, radius=0.3, slices=9, thickness=thickness)
+            assert np.max(np.abs(v[inside] - 1.0)) < GRAZING_PLANE_TOL, (name, thickness)
+        for weighting in ("uniform", "bitcount"):
+            w = vbao(gb, radius=0.3, weighting=weighting)
+            assert np.max(np.abs(w[inside] - 1.0)) < EXACT_TOL, (name, weighting)
+        small = vo.render_gbuffer(vo.scenes.slab(), cam)
+        means[name] = np.nanmean(vbao(small, radius=0.3))
+    assert abs(means["level"] - means["tilted"]) < TILT_MEAN_TOL
+
+
+def test_float32_agrees_on_the_cornell_box():
+    """The Cornell box seen head-on: walls, floor and ceiling with n_z = 0 in view space;
+    float32 and float64 G-buffers agree but for sector flips (see FLOAT32_TOL)."""
+    scene = vo.scenes.cornell_box()
+    gb = vo.render_gbuffer(scene, scene.camera((64, 64)))
+    g32 = gb.astype(np.float32)
+    assert np.sum(gb.normal[..., 2][gb.valid] == 0.0) > 1000
+    for kw in (dict(), dict(thickness=0.1), dict(weighting="uniform")):
+        v64, v32 = vbao(gb, radius=0.5, **kw), vbao(g32, radius=0.5, **kw)
+        assert v32.dtype == np.float32
+        d = np.abs(v32[gb.valid].astype(np.float64) - v64[gb.valid])
+        assert d.max() <= np.pi / 32 / 3 + FLOAT32_TOL, kw
+        assert np.mean(d > FLOAT32_TOL) <= FLOAT32_FLIP_FRACTION, kw

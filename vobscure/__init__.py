@@ -17,7 +17,7 @@ from .render import render_gbuffer
 from .scenes import Scene
 from .screenspace import (alchemy, bilateral_blur, combine_radii, gtao, gtao_bent_normals, hbao, sao, vbao,
                           vo_area, vo_line, vo_point, vo_reference)
-from . import io, methods, objectspace, patterns, references, shading, trees
+from . import io, methods, objectspace, patterns, references, shading, temporal, trees
 
 
 def __getattr__(name):
@@ -71,6 +71,7 @@ __all__ = [
     "vbao",
     "volumetric_obscurance",
     "patterns",
+    "temporal",
     "trees",
     "vo_area",
     "vo_line",

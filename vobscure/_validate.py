@@ -17,6 +17,7 @@ __all__ = [
     "as_points",
     "as_unit_vectors",
     "as_rng",
+    "check_bool",
     "check_choice",
     "check_positive",
     "check_int",
@@ -105,6 +106,17 @@ def as_rng(seed) -> np.random.Generator:
     if seed is None or (isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed >= 0):
         return np.random.default_rng(seed)
     raise ValueError(f"seed must be a non-negative int, a numpy.random.Generator or None, got {seed!r}")
+
+
+def check_bool(value, name: str) -> bool:
+    """``value`` as a bool when it is one (Python's or NumPy's); anything else is an error.
+
+    Truthy strings such as ``"no"`` or ``"False"`` and numbers are rejected rather than taken
+    by their truth value, which would silently read ``"no"`` as True.
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValueError(f"{name} must be True or False, got {value!r}")
 
 
 def check_choice(value, name: str, choices: Iterable[str]) -> str:

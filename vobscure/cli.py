@@ -112,6 +112,26 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--screen-samples", type=int, default=SCREEN_SAMPLES,
                    help=f"view-ray segments per pixel of the converged screen-space VO (default {SCREEN_SAMPLES})")
     c.add_argument("--orbit", type=int, default=0, metavar="N", help="N-frame camera orbit: temporal flicker")
+    seq = c.add_argument_group("frame sequences: the error after N frames (docs/temporal.md)")
+    seq.add_argument("--frames", type=int, default=0, metavar="N",
+                     help="run every method over N frames, accumulate, and score each frame (temporal.csv, "
+                          "temporal.png, the verdict's frame sentences)")
+    seq.add_argument("--motion", choices=("static", "orbit", "dolly"), default="static",
+                     help="the camera path of the frames (default static)")
+    seq.add_argument("--step", type=float, default=None, metavar="X",
+                     help="per-frame step: degrees for orbit (default 0.5), fraction of the eye-target distance "
+                          "for dolly (default 0.005)")
+    seq.add_argument("--cameras", type=Path, default=None, metavar="FILE",
+                     help="a JSON list of camera records (Camera.to_dict) as the path, in place of --motion")
+    seq.add_argument("--schedule", default="white", metavar="LIST",
+                     help="noise schedules per frame, comma-separated: white, rotate, r2, gtao, blue (default white)")
+    seq.add_argument("--accumulate", default="mean", metavar="LIST",
+                     help="accumulations, comma-separated: mean, ema:ALPHA, clip:ALPHA (default mean)")
+    seq.add_argument("--clamp", action="store_true", help="clamp the history to the new frame's 3x3 range")
+    seq.add_argument("--no-reprojection", dest="reproject", action="store_false",
+                     help="use the history in place (shows the ghosting that reprojection avoids)")
+    seq.add_argument("--denoise", choices=("before", "after"), default=None,
+                     help="the bilateral blur on each frame before accumulating, or on the accumulated image")
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--target-rmse", type=float, default=None, metavar="X",
                    help="the accuracy to meet against each method's own reference "
@@ -227,9 +247,12 @@ def _camera_arg(spec: str, size):
 
 
 def _compare_main(args) -> int:
+    from ._io import check_writable_dir
     from .experiments.compare import DEFAULT_SIZE, QUICK_SIZE, compare, report_text
 
     size = tuple(args.size) if args.size else (QUICK_SIZE if args.quick else DEFAULT_SIZE)
+    if args.out is not None:
+        check_writable_dir(args.out, "--out")   # before the work, not after it
     cache = False if args.no_cache else (args.cache if args.cache is not None else True)
     scene, name = args.scene, None
     if args.gbuffer is not None:
@@ -253,10 +276,25 @@ def _compare_main(args) -> int:
                      screen_samples=args.screen_samples, seed=args.seed, orbit=args.orbit,
                      target_rmse=args.target_rmse, budget_ms=args.budget_ms, suggest=args.suggest,
                      quick=args.quick, out=args.out, cache=cache, progress=not args.quiet,
-                     allow_open=args.allow_open)
+                     allow_open=args.allow_open, **_sequence_options(args))
     if not args.quiet:
         print(report_text(result))
     return 0
+
+
+def _sequence_options(args) -> dict:
+    """compare()'s frame-sequence keywords from the command line (--frames, --cameras, ...)."""
+    opts = dict(frames=args.frames, motion=args.motion, step=args.step, schedules=args.schedule,
+                accumulate=args.accumulate, clamp=args.clamp, reproject=args.reproject, denoise=args.denoise)
+    if args.frames < 0:
+        raise ValueError(f"--frames must be a number of frames >= 0, got {args.frames}")
+    if args.cameras is not None:
+        from .temporal import cameras_from_file
+
+        opts["cameras"] = cameras_from_file(args.cameras)
+    elif args.frames == 1:
+        raise ValueError("--frames needs at least 2 frames (or --cameras FILE)")
+    return opts
 
 
 def _figures_main(args) -> int:
@@ -271,6 +309,9 @@ def _figures_main(args) -> int:
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ValueError(f"unknown figure(s) {', '.join(unknown)}; expected 'all' or one of {', '.join(known)}")
+    from ._io import check_writable_dir
+
+    check_writable_dir(args.out, "--out")   # before the work, not after it
     if args.from_csv:
         paths = figures.replot(names, args.out)
     else:
@@ -465,6 +506,7 @@ def _estimate_main(args) -> int:
     from tqdm import tqdm
 
     from . import methods
+    from ._io import check_writable_dir
     from .convert import NormalsRenormalizedWarning, NormalsRepairedWarning
     from .io import write_image
     from .metrics import flicker
@@ -489,6 +531,8 @@ def _estimate_main(args) -> int:
         raise ValueError(f"--radius must be a finite number > 0, got {args.radius}")
     many = len(depth_paths) > 1
     outs = _estimate_outputs(args.out, depth_paths, _method_tag(args.method))
+    for folder in dict.fromkeys(o.parent for o in outs):
+        check_writable_dir(folder, "the folder of --out")   # before the work, not after it
     read_frame = _frame_reader(args)
 
     frames, references, camera, started = [], [], None, time.perf_counter()
@@ -543,12 +587,12 @@ def _estimate_main(args) -> int:
             print(f"  wrote {len(outs)} files: {outs[0]} ... {outs[-1]}")
     if many and not args.quiet:
         if references:
-            f = flicker(np.stack(frames), np.stack(references))
+            f = flicker(np.stack(frames), np.stack(references), flip=False)
             print(f"  flicker: {f.value:.5f} (mean |V(t+1) - V(t)| = {f.estimate_change:.5f} less the "
                   f"reference's {f.reference_change:.5f}, vo_reference with {args.flicker_reference} samples) "
                   f"over {f.pairs} pixel pairs ({f.ignored} skipped)")
         else:
-            f = flicker(np.stack(frames))
+            f = flicker(np.stack(frames), flip=False)
             print(f"  flicker: mean |V(t+1) - V(t)| = {f.estimate_change:.5f} over {f.pairs} pixel pairs "
                   f"({f.ignored} undefined skipped); it includes the real change of the frames "
                   f"(--flicker-reference SAMPLES subtracts it)")
@@ -661,12 +705,13 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
     """Run the render job; returns the provenance record (also stored in the ``.npz``).
     ``camera`` (a :class:`~vobscure.Camera` of ``size``) replaces the scene's view."""
     from . import __version__
-    from ._io import save_npz
+    from ._io import check_writable_dir, file_set, save_npz
     from .experiments.common import default_radius
     from .render import render_gbuffer
     from .groundtruth import ground_truth
     from .scenes import resolve
 
+    check_writable_dir(out, "out")   # before the work, not after it
     t0 = time.perf_counter()
     sc, scene_spec = resolve(scene)
     cam = sc.camera(tuple(size)) if camera is None else camera
@@ -685,12 +730,13 @@ def render(*, scene: str = DEFAULT_SCENE, size=DEFAULT_SIZE, quantity: str = "ao
         "valid_pixels": int(gb.valid.sum()), "allow_open": bool(allow_open),
     }
     stem = f"{Path(scene_spec).stem}_{quantity}"
-    save_npz(out / f"{stem}.npz", provenance, depth=gb.depth, normal=gb.normal, valid=gb.valid,
-             world_position=gb.world_position, world_normal=gb.world_normal,
-             visibility=ref.value, stderr=ref.stderr)
-    _save_png(out / f"{stem}_depth.png", _depth_image(gb.depth, gb.valid))
-    _save_png(out / f"{stem}_normal.png", _normal_image(gb.normal, gb.valid))
-    _save_png(out / f"{stem}_visibility.png", _visibility_image(ref.value, gb.valid))
+    with file_set(out, stem) as stage:    # the four files replace the previous run's together
+        save_npz(stage / f"{stem}.npz", provenance, depth=gb.depth, normal=gb.normal, valid=gb.valid,
+                 world_position=gb.world_position, world_normal=gb.world_normal,
+                 visibility=ref.value, stderr=ref.stderr)
+        _save_png(stage / f"{stem}_depth.png", _depth_image(gb.depth, gb.valid))
+        _save_png(stage / f"{stem}_normal.png", _normal_image(gb.normal, gb.valid))
+        _save_png(stage / f"{stem}_visibility.png", _visibility_image(ref.value, gb.valid))
     provenance["files"] = [f"{stem}{s}" for s in (".npz", "_depth.png", "_normal.png", "_visibility.png")]
     return provenance
 
@@ -780,8 +826,34 @@ def _numbers_as_written(argv: list[str]) -> list[str]:
     return out
 
 
+def _error_text(exc: BaseException) -> str:
+    """One line for an error: the message of a ValueError; for a file-system error (OSError)
+    its reason and the path it names."""
+    if isinstance(exc, OSError) and exc.strerror:
+        text = exc.strerror if exc.filename is None else f"{exc.filename}: {exc.strerror}"
+        if exc.filename2 is not None:
+            text += f" (-> {exc.filename2})"
+    else:
+        text = str(exc)
+    return " ".join(text.split())
+
+
+def _warning_printer(prefix: str):
+    """A ``warnings.showwarning`` that prints one line, ``PREFIX: warning: MESSAGE``."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"{prefix}: warning: {' '.join(str(message).split())}", file=sys.stderr if file is None else file)
+
+    return show
+
+
 def main(argv=None) -> int:
-    """Entry point of the ``vobscure`` command; returns the exit status."""
+    """Entry point of the ``vobscure`` command; returns the exit status.
+
+    Errors in the arguments, in the input files and in writing the outputs are one line on
+    stderr naming the option or path, and the exit status 2.
+    """
+    from ._io import check_writable_dir
+
     parser = _parser()
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     args = parser.parse_args(_numbers_as_written(_joined_list_values(argv)))
@@ -795,26 +867,21 @@ def main(argv=None) -> int:
             doc = (getattr(scenes, name).__doc__ or "").strip().splitlines()
             print(f"{name:16s} {doc[0] if doc else ''}")
         return 0
-    if args.command == "estimate":
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning_printer(f"vobscure {args.command}")
         try:
-            return _estimate_main(args)
-        except (ValueError, FileNotFoundError) as exc:
-            print(f"vobscure estimate: error: {exc}", file=sys.stderr)
+            if args.command == "estimate":
+                return _estimate_main(args)
+            if args.command in ("compare", "figures"):
+                return _compare_main(args) if args.command == "compare" else _figures_main(args)
+            check_writable_dir(args.out, "--out")   # before the work, not after it
+            record = render(scene=args.scene, size=args.size, quantity=args.quantity, radius=args.radius,
+                            rays=args.rays, samples=args.samples, seed=args.seed, threads=args.threads,
+                            out=args.out, progress=not args.quiet, allow_open=args.allow_open,
+                            camera=_view_camera(args, args.size, args.scene))
+        except (ValueError, OSError) as exc:
+            print(f"vobscure {args.command}: error: {_error_text(exc)}", file=sys.stderr)
             return 2
-    if args.command in ("compare", "figures"):
-        try:
-            return _compare_main(args) if args.command == "compare" else _figures_main(args)
-        except (ValueError, FileNotFoundError) as exc:
-            print(f"vobscure {args.command}: error: {exc}", file=sys.stderr)
-            return 2
-    try:
-        record = render(scene=args.scene, size=args.size, quantity=args.quantity, radius=args.radius,
-                        rays=args.rays, samples=args.samples, seed=args.seed, threads=args.threads,
-                        out=args.out, progress=not args.quiet, allow_open=args.allow_open,
-                        camera=_view_camera(args, args.size, args.scene))
-    except (ValueError, FileNotFoundError) as exc:
-        print(f"vobscure render: error: {exc}", file=sys.stderr)
-        return 2
     if not args.quiet:
         print(f"{record['scene']}: {record['quantity']} at {args.size[0]}x{args.size[1]}, radius "
               f"{record['radius']:.4g}, {record['samples_per_pixel']} samples/pixel, "

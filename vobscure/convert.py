@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from ._validate import as_numeric, check_choice, check_positive
+from ._validate import as_numeric, check_bool, check_choice, check_positive
 
 __all__ = ["convert_buffers", "normals_from_depth", "NormalsRenormalizedWarning", "NormalsRepairedWarning",
            "DEPTH_KINDS", "NORMAL_SPACES", "NORMAL_ENCODINGS", "CONVENTIONS", "NORMAL_LENGTH_TOL",
@@ -104,6 +104,7 @@ def convert_buffers(depth, normal, *, camera, depth_kind, near, far, normal_spac
     check_choice(convention, "convention", CONVENTIONS)
     check_choice(origin, "origin", ("upper", "lower"))
     normal_tol = check_positive(normal_tol, "normal_tol")
+    repair_normals = check_bool(repair_normals, "repair_normals")
 
     # -- shapes and dtypes
     given = as_numeric(depth, "depth", expected="a numeric (H, W) array")
@@ -364,7 +365,7 @@ def _normals_in_bands(nrm, camera, depth, covered, dtype, *, normal_space, encod
     H, W = covered.shape
     out = np.zeros((H, W, 3), dtype=dtype)
     counts = {"renormalized": 0, "flipped": 0, "repaired": 0}
-    missing_all, worst = np.zeros((H, W), dtype=bool), 0.0
+    missing_all, worst, zero = np.zeros((H, W), dtype=bool), 0.0, 0
     for r0 in range(0, H, NORMAL_BAND_ROWS):
         rows = slice(r0, min(r0 + NORMAL_BAND_ROWS, H))
         n = _convert_normals(nrm[rows], camera, covered[rows], normal_space=normal_space, encoding=encoding,
@@ -373,11 +374,13 @@ def _normals_in_bands(nrm, camera, depth, covered, dtype, *, normal_space, encod
         out[rows] = band
         counts["renormalized"] += c["renormalized"]
         counts["flipped"] += c["flipped"]
+        zero += c["zero"]
         missing_all[rows] = missing
         worst = max(worst, diff)
     k = int(missing_all.sum())
     if k and not repair:
-        raise ValueError(f"normal has {k} zero or NaN vector(s) on covered pixels (finite depth); "
+        raise ValueError(f"normal has {k} zero or NaN vector(s) on covered pixels (finite depth): "
+                         f"{zero} of length <= {NORMAL_ZERO_TOL:g}, {k - zero} with a NaN or inf component; "
                          "mark those pixels background, or pass repair_normals=True to derive "
                          "their normals from the depth")
     if counts["renormalized"]:
@@ -428,8 +431,14 @@ def _check_normals(n, covered, rays, tol):
     largest length difference beyond ``tol``)."""
     counts = {"renormalized": 0, "flipped": 0}
     with np.errstate(invalid="ignore", over="ignore"):
-        length = np.sqrt(np.einsum("...i,...i->...", n, n))
+        # |n| = s |n / s| with s the largest |component|: finite for any finite vector, where
+        # n . n itself would overflow (|n| = 1e200) or underflow
+        s = np.max(np.abs(n), axis=-1)
+        s = np.where(np.isfinite(s) & (s > 0), s, 1.0)
+        m = n / s[..., None]
+        length = s * np.sqrt(np.einsum("...i,...i->...", m, m))
     missing = covered & ~(np.isfinite(length) & (length > NORMAL_ZERO_TOL))
+    counts["zero"] = int(np.count_nonzero(missing & np.isfinite(length)))
     ok = covered & ~missing
     off = ok & (np.abs(length - 1.0) > tol)
     counts["renormalized"] = int(off.sum())

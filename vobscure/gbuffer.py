@@ -94,6 +94,11 @@ class GBuffer:
         edge read real depth. The estimators and the ground truth return the inner frame.
     inner_camera : Camera, optional
         With ``guard`` > 0: the camera of the inner frame (``camera`` is the widened one).
+    motion : (H, W, 2) array_like of float, optional
+        A renderer's motion vectors: per pixel the offset (dx, dy) in pixels (x right, y down)
+        from the pixel's centre to where its surface point was seen in the previous frame;
+        NaN where unknown. Read by :func:`vobscure.temporal.reproject` instead of the motion
+        it derives from the two cameras and the depth.
 
     Attributes
     ----------
@@ -123,10 +128,13 @@ class GBuffer:
         The solid intervals, when known (see :meth:`with_intervals`).
     guard : int
         The guard band's width in pixels, 0 when there is none (see :meth:`inner`).
+    motion : (H, W, 2) float or None
+        The motion vectors, when given (see :meth:`with_motion`).
     """
 
     def __init__(self, camera, *, depth, normal, valid, primitive, hits, dtype=np.float64,
-                 view_to_world=None, conversion=None, intervals=None, guard=0, inner_camera=None):
+                 view_to_world=None, conversion=None, intervals=None, guard=0, inner_camera=None,
+                 motion=None):
         if normal is None:
             raise ValueError("a GBuffer needs normals (normal_clamp and the ground truth read them); "
                              "GBuffer.from_arrays(depth, camera=...) derives them from the depth")
@@ -141,6 +149,7 @@ class GBuffer:
         self.conversion = conversion
         self.intervals = None if intervals is None else self._checked_intervals(intervals)
         self.guard, self._inner_camera = _checked_guard(guard, inner_camera, self.depth.shape)
+        self.motion = None if motion is None else _frozen(_checked_motion(motion, self.depth.shape, self.dtype))
 
     def _checked_intervals(self, intervals):
         from .layers import SolidIntervals
@@ -168,10 +177,38 @@ class GBuffer:
         >>> layered.intervals.count, gb.intervals is None
         (1, True)
         """
-        return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
-                       primitive=self.primitive, hits=self._hit_source, dtype=self.dtype,
-                       view_to_world=self._view_to_world, conversion=self.conversion, intervals=intervals,
-                       guard=self.guard, inner_camera=self._inner_camera)
+        return self._replace(intervals=intervals)
+
+    def with_motion(self, motion) -> "GBuffer":
+        """The same G-buffer with the motion vectors ``motion`` ((H, W, 2) pixels, see
+        :attr:`motion`; None to drop them).
+
+        Examples
+        --------
+        >>> import numpy as np, vobscure as vo
+        >>> cam = vo.Camera.look_at((0, 3, 0), (0, 0, 0), up=(0, 0, -1), size=(4, 4), ortho_height=2.0)
+        >>> gb = vo.render_gbuffer(vo.scenes.slab(), cam).with_motion(np.zeros((4, 4, 2)))
+        >>> gb.motion.shape
+        (4, 4, 2)
+        """
+        return self._replace(motion=motion)
+
+    def _replace(self, **changes) -> "GBuffer":
+        """A G-buffer with the same fields as this one except ``changes`` (constructor keywords)."""
+        fields = dict(depth=self.depth, normal=self.normal, valid=self.valid, primitive=self.primitive,
+                      hits=self._hit_source, dtype=self.dtype, view_to_world=self._view_to_world,
+                      conversion=self.conversion, intervals=self.intervals, guard=self.guard,
+                      inner_camera=self._inner_camera, motion=self.motion)
+        fields.update(changes)
+        return GBuffer(fields.pop("camera", self.camera), **fields)
+
+    @property
+    def view_transform(self) -> tuple[np.ndarray, np.ndarray]:
+        """(R, t): the world -> view rotation (3, 3) and translation (3,) of this view,
+        ``p_view = R p_world + t`` (the camera's pose, or the ``view`` matrix given to
+        :meth:`from_arrays`); a ValueError when there is neither."""
+        R, t = self._world_frame()
+        return np.array(R, dtype=np.float64), np.array(t, dtype=np.float64)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -285,7 +322,7 @@ class GBuffer:
     def from_arrays(cls, depth, normal=None, *, camera, depth_kind="linear", near=None, far=None,
                     normal_space="view", view=None, normal_encoding="signed", convention="vobscure",
                     background=None, origin="upper", normal_tol=NORMAL_LENGTH_TOL,
-                    repair_normals=False, back_depth=None) -> "GBuffer":
+                    repair_normals=False, back_depth=None, motion=None) -> "GBuffer":
         """A G-buffer from your own depth (and normal) images, converted to the library's
         conventions.
 
@@ -360,6 +397,13 @@ class GBuffer:
             where it lies in front of the depth (rounding) it is set to the depth and counted in
             ``conversion["back_clamped"]`` (``conversion["back_background"]`` counts the
             former on covered pixels); on background pixels the slot is unused.
+        motion : (H, W, 2) array_like of float, optional
+            Motion vectors in pixels towards the previous frame, (dx, dy) with x right and y
+            down the image as stored (``origin="lower"``: y up; the rows are flipped and dy
+            negated with the images), NaN where unknown: :attr:`motion`, read by
+            :func:`vobscure.temporal.reproject`. A renderer's vectors towards the *next*
+            frame, or in other units (NDC, UV), must be converted first (negated, scaled by
+            the image size).
 
         Returns
         -------
@@ -433,7 +477,7 @@ class GBuffer:
                                              normal_encoding=normal_encoding, convention=convention,
                                              background=background, origin=origin,
                                              normal_tol=normal_tol, repair_normals=repair_normals,
-                                             back_depth=back_depth))
+                                             back_depth=back_depth), motion=_stored_motion(motion, origin))
 
     @staticmethod
     def derive_normals(camera, depth) -> np.ndarray:
@@ -467,12 +511,35 @@ class GBuffer:
         return n
 
     def astype(self, dtype) -> "GBuffer":
-        """The same G-buffer whose float images are of ``dtype`` (e.g. float32 for precision tests)."""
+        """The same G-buffer whose float images are of ``dtype`` (e.g. float32 for precision tests).
+
+        Raises
+        ------
+        ValueError
+            If ``dtype`` is not a float dtype, or a covered pixel's depth does not fit in it
+            (it would overflow to +inf, which marks background, or underflow to 0): the error
+            names the largest (smallest) depth and the dtype's range.
+        """
+        try:
+            target = np.dtype(dtype)
+        except TypeError:
+            target = None
+        if target is None or target.kind != "f":
+            raise ValueError(f"dtype must be a float dtype such as numpy.float32, got {dtype!r}")
+        depth = np.abs(np.asarray(self.depth, dtype=np.float64)[self.valid])
+        if depth.size and target.itemsize < 8:
+            info = np.finfo(target)
+            if depth.max() > info.max:
+                raise ValueError(f"astype({target}): the largest depth of a covered pixel, {depth.max():.6g}, exceeds "
+                                 f"{target}'s maximum {float(info.max):.6g} and would become inf (background); "
+                                 f"rescale the scene and camera, or keep float64")
+            tiny = depth[(depth > 0) & (depth < info.tiny)]
+            if tiny.size:
+                raise ValueError(f"astype({target}): the smallest depth of a covered pixel, {tiny.min():.6g}, is "
+                                 f"below {target}'s smallest normal number {float(info.tiny):.6g}; rescale the "
+                                 f"scene and camera, or keep float64")
         hits = None if self._hit_source is None else self.hits
-        return GBuffer(self.camera, depth=self.depth, normal=self.normal, valid=self.valid,
-                       primitive=self.primitive, hits=hits, dtype=dtype,
-                       view_to_world=self._view_to_world, conversion=self.conversion,
-                       intervals=self.intervals, guard=self.guard, inner_camera=self._inner_camera)
+        return self._replace(hits=hits, dtype=target)
 
     def inner(self) -> "GBuffer":
         """The G-buffer of the inner frame: this one without its guard band (itself when
@@ -513,10 +580,10 @@ class GBuffer:
             layers = None if intervals.layers is None else intervals.layers.crop(rows, cols)
             intervals = SolidIntervals(intervals.front[:, rows, cols], intervals.back[:, rows, cols],
                                        dtype=intervals.dtype, layers=layers)
-        return GBuffer(self._inner_camera, depth=self.depth[rows, cols], normal=self.normal[rows, cols],
-                       valid=self.valid[rows, cols], primitive=self.primitive[rows, cols], hits=hits,
-                       dtype=self.dtype, view_to_world=self._view_to_world, conversion=self.conversion,
-                       intervals=intervals)
+        motion = None if self.motion is None else self.motion[rows, cols]
+        return self._replace(camera=self._inner_camera, depth=self.depth[rows, cols], normal=self.normal[rows, cols],
+                             valid=self.valid[rows, cols], primitive=self.primitive[rows, cols], hits=hits,
+                             intervals=intervals, guard=0, inner_camera=None, motion=motion)
 
     def __repr__(self) -> str:
         H, W = self.shape
@@ -538,6 +605,34 @@ def _checked_guard(guard, inner_camera, shape) -> tuple[int, object]:
         raise ValueError(f"inner_camera.shape must be the image's shape {shape} less 2 * guard = "
                          f"{2 * guard}, got {inner_camera.shape}")
     return guard, inner_camera
+
+
+def _checked_motion(motion, shape, dtype) -> np.ndarray:
+    """Motion vectors as an (H, W, 2) array of ``dtype``, finite (or NaN where unknown)."""
+    from ._validate import as_numeric
+
+    m = as_numeric(motion, "motion", kinds="fiu", expected="an (H, W, 2) array of pixel offsets")
+    if m.shape != tuple(shape) + (2,):
+        raise ValueError(f"motion must have shape {tuple(shape) + (2,)} (the image's, with (dx, dy) per pixel), "
+                         f"got {m.shape}")
+    m = m.astype(dtype, copy=True)
+    if np.isinf(m).any():
+        raise ValueError("motion must be finite (NaN where a pixel's motion is unknown), got +-inf")
+    return m
+
+
+def _stored_motion(motion, origin):
+    """Motion vectors of an image stored with ``origin``, in the library's rows (row 0 at the top)."""
+    if motion is None or origin != "lower":
+        return motion
+    from ._validate import as_numeric
+
+    m = as_numeric(motion, "motion", kinds="fiu", expected="an (H, W, 2) array of pixel offsets")
+    if m.ndim != 3 or m.shape[-1] != 2:
+        raise ValueError(f"motion must have shape (H, W, 2) (the image's, with (dx, dy) per pixel), got {m.shape}")
+    m = np.array(m[::-1], dtype=np.float64)
+    m[..., 1] *= -1.0
+    return m
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

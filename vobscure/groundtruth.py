@@ -21,22 +21,36 @@ by default everywhere, as in the rest of the library (``docs/conventions.md``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from ._validate import as_points, as_rng, as_unit_vectors, check_choice, check_int, check_positive
+from ._validate import as_points, as_rng, as_unit_vectors, check_bool, check_choice, check_int, check_positive
 from .estimate import DEFAULT_GROUPS, Estimate
-from .raytrace import CHUNK_RAYS, Hits, parallel_map
+from .raytrace import CHUNK_RAYS, OFFSET_RELATIVE, Hits, parallel_map
 from .sampling import (cube_to_uniform_ball, shifted_hemisphere_directions, sobol_base, to_world,
                        square_to_cosine_hemisphere, square_to_uniform_hemisphere)
 from .scenes import Scene, as_scene
 
-__all__ = ["ambient_occlusion", "obscurance", "volumetric_obscurance", "ground_truth",
+__all__ = ["ambient_occlusion", "obscurance", "volumetric_obscurance", "ground_truth", "SmallRadiusWarning",
+           "SCENE_CHECK_SAMPLES",
            "OBSCURANCE_FALLOFFS", "VO_FALLOFFS", "DEFAULT_GROUPS", "DEFAULT_FALLOFF", "QUANTITIES"]
 
 _WARPS = {"cosine": square_to_cosine_hemisphere, "uniform": square_to_uniform_hemisphere}
+
+#: Covered pixels (evenly spaced in row-major order) whose hit points :func:`ground_truth`
+#: checks against their triangles in the scene, to catch a G-buffer of another scene.
+SCENE_CHECK_SAMPLES = 256
+
+
+class SmallRadiusWarning(UserWarning):
+    """The volumetric obscurance's radius is below the tracer's ray offset (1e-5 of the scene's
+    scale, :attr:`vobscure.raytrace.Tracer.offset`): the ball then lies within the distance at
+    which the inside test can tell the two sides of a surface apart, and whole balls test as
+    occupied or as empty (values of exactly 0 or 1 where the limit is 1/2). The result is
+    returned as computed, not corrected."""
 
 
 def _linear(t):
@@ -81,6 +95,7 @@ def _chunked(kernel, n: int, g: int, m: int, dim: int, rng, *, threads, progress
     unoccluded directions for bent normals). ``per_group`` is the number of samples behind
     one group mean (default m; 2 m for the antithetic ball samples).
     """
+    progress = check_bool(progress, "progress")
     base = sobol_base(dim, m, rng)
     shifts = rng.random((n, g, dim))
     per_chunk = max(1, CHUNK_RAYS * 2 // (g * m))
@@ -340,11 +355,12 @@ def ambient_occlusion(scene, points, normals, *, rays: int = 256, weighting: str
     check_choice(weighting, "weighting", _WARPS)
     max_distance = check_positive(max_distance, "max_distance", allow_inf=True)
     bounces, albedo = _check_bounces(bounces, albedo)
+    bent_normals = check_bool(bent_normals, "bent_normals")
     if bounces and bent_normals:
         raise ValueError("bent_normals is not available with bounces > 0: the bent normal is a property of "
                          "the black-occluder visibility; compute it in a call with bounces=0")
     return _ao(scene, points, normals, normals, rays=rays, weighting=weighting,
-               max_distance=max_distance, seed=seed, bent_normals=bool(bent_normals),
+               max_distance=max_distance, seed=seed, bent_normals=bent_normals,
                groups=groups, threads=threads, progress=progress, bounces=bounces, albedo=albedo)
 
 
@@ -478,6 +494,11 @@ def _shell_occupied(tracer, q, shell) -> np.ndarray:
 def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes, groups,
                 threads, progress, desc="volumetric obscurance", shell=None):
     tracer = scene.tracer
+    if radius < tracer.offset:
+        warnings.warn(f"radius {radius:.3g} is below the tracer's ray offset {tracer.offset:.3g} ({OFFSET_RELATIVE:g} of the scene's "
+                      f"scale {tracer.scale:.3g}): the inside test cannot resolve a ball this small, and its "
+                      f"samples test all occupied or all empty (0 or 1 where a flat surface gives 1/2); use "
+                      f"radius >= {tracer.offset:.3g}", SmallRadiusWarning, stacklevel=3)
     rho, rho_mean = VO_FALLOFFS[falloff]
     # antithetic pairs: each base point x also gives -x, so m base points make 2 m samples
     g, m2 = _groups(samples, groups, "samples")
@@ -526,6 +547,44 @@ def _volumetric(scene, points, normals, *, radius, samples, falloff, seed, votes
     return Estimate(value=value, stderr=stderr, samples=g * 2 * m)
 
 
+def _check_same_scene(tracer, primitive: np.ndarray, points: np.ndarray) -> None:
+    """Reject a G-buffer rendered from another scene: every covered pixel's primitive must be
+    a triangle of ``tracer``, and :data:`SCENE_CHECK_SAMPLES` hit points must lie on their
+    triangles within the tracer's ray offset (1e-5 of the scene's scale; a float32 hit point
+    is within about 1e-7 of it)."""
+    count = len(tracer.triangles)
+    bad = (primitive < 0) | (primitive >= count)
+    if np.any(bad):
+        raise ValueError(f"gbuffer does not belong to this scene: {int(np.count_nonzero(bad))} covered pixel(s) "
+                         f"hit primitive indices outside the scene's {count} triangles (largest "
+                         f"{int(primitive.max())}); render the G-buffer from the scene given here")
+    if len(points) == 0:
+        return
+    pick = np.unique(np.linspace(0, len(points) - 1, min(SCENE_CHECK_SAMPLES, len(points))).astype(np.int64))
+    p = np.asarray(points, dtype=np.float64)[pick]
+    tri = np.asarray(tracer.triangles, dtype=np.float64)[primitive[pick]]
+    a, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    # barycentric coordinates of p's projection on the triangle's plane, clipped to the
+    # triangle: a point of the triangle, so |p - q| bounds p's distance from it from above
+    d = p - a
+    g11, g12, g22 = np.einsum("ij,ij->i", e1, e1), np.einsum("ij,ij->i", e1, e2), np.einsum("ij,ij->i", e2, e2)
+    b1, b2 = np.einsum("ij,ij->i", d, e1), np.einsum("ij,ij->i", d, e2)
+    det = g11 * g22 - g12 * g12
+    safe = np.where(det > 0, det, 1.0)
+    u = np.where(det > 0, (g22 * b1 - g12 * b2) / safe, 0.0)
+    v = np.where(det > 0, (g11 * b2 - g12 * b1) / safe, 0.0)
+    lam = np.clip(np.stack([1.0 - u - v, u, v], axis=1), 0.0, None)
+    lam /= np.maximum(lam.sum(axis=1, keepdims=True), 1e-300)
+    q = np.einsum("ik,ikj->ij", lam, tri)
+    off = np.linalg.norm(p - q, axis=1)
+    far = off > tracer.offset
+    if np.any(far):
+        raise ValueError(f"gbuffer does not belong to this scene: {int(np.count_nonzero(far))} of {len(pick)} checked "
+                         f"hit points lie off their triangles (up to {float(off.max()):.3g}, tolerance "
+                         f"{tracer.offset:.3g}, {OFFSET_RELATIVE:g} of the scene's scale); render the G-buffer from the scene "
+                         f"given here")
+
+
 def _check_votes(votes) -> int:
     votes = check_int(votes, "votes")
     if votes % 2 == 0:
@@ -556,6 +615,9 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
         Unit normals on the open side (renormalized); required with ``normal_clamp=True``,
         unused otherwise.
     radius : float
+        The ball's radius; below the tracer's ray offset (:data:`vobscure.raytrace.OFFSET_RELATIVE`
+        of the scene's scale) a :class:`SmallRadiusWarning` says that the inside test cannot
+        resolve the ball (the sub-offset radius is not corrected: the warning is the policy).
     normal_clamp : bool
         The half-ball on the normal's side instead of the ball (default False), as
         ``normal_clamp`` of :func:`ground_truth` and of the screen-space estimators. Before
@@ -605,8 +667,8 @@ def volumetric_obscurance(scene, points, normals=None, *, radius: float, normal_
     """
     scene = as_scene(scene)
     points = as_points(points, "points")
-    if not isinstance(normal_clamp, (bool, np.bool_)):
-        raise ValueError(f"normal_clamp must be True or False, got {normal_clamp!r}")
+    normal_clamp = check_bool(normal_clamp, "normal_clamp")
+    allow_open = check_bool(allow_open, "allow_open")
     if normal_clamp and normals is None:
         raise ValueError("normal_clamp=True needs normals: pass normals (n, 3), the side of each "
                          "point's half-ball, or normal_clamp=False for the whole ball")
@@ -696,6 +758,21 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
         (H, W) value and stderr, NaN on background pixels; of the inner frame
         (:meth:`GBuffer.inner`) when the G-buffer has a guard band.
 
+    Raises
+    ------
+    ValueError
+        Bad arguments (a bool argument that is not True or False included), or a rendered
+        G-buffer that does not belong to ``scene``: a covered pixel's primitive index is not
+        one of the scene's triangles, or one of :data:`SCENE_CHECK_SAMPLES` hit points lies
+        further than the tracer's ray offset from its triangle. A G-buffer from
+        :meth:`GBuffer.from_arrays` has no primitives and is not checked.
+
+    Warns
+    -----
+    SmallRadiusWarning
+        ``"volumetric"`` with a radius below the tracer's ray offset, where the inside test
+        cannot resolve the ball (the value is returned uncorrected).
+
     Notes
     -----
     Hemispheres are centred on the G-buffer's world-space shading normal; rays start off
@@ -708,6 +785,9 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     if not isinstance(gbuffer, GBuffer):
         raise ValueError(f"gbuffer must be a vobscure GBuffer (from render_gbuffer), got {type(gbuffer).__name__}")
     check_choice(quantity, "quantity", QUANTITIES)
+    normal_clamp = check_bool(normal_clamp, "normal_clamp")
+    allow_open = check_bool(allow_open, "allow_open")
+    check_bool(progress, "progress")
     if radius is not None:
         radius = check_positive(radius, "radius", allow_inf=(quantity == "ao"))
     elif quantity != "ao":
@@ -722,6 +802,8 @@ def ground_truth(scene, gbuffer, *, quantity: str = "ao", radius: float | None =
     valid = gbuffer.valid
     hits = gbuffer.hits  # per covered pixel, row-major: the order of a boolean mask
     points, normals, geo = hits["world_position"], hits["world_normal"], hits["world_geometric_normal"]
+    if gbuffer.has_hit_data:
+        _check_same_scene(scene.tracer, gbuffer.primitive[valid], points)
     desc = f"ground truth ({quantity})"
     if quantity == "ao":
         check_choice(weighting, "weighting", _WARPS)

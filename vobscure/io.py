@@ -32,8 +32,13 @@ file in place.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
+import sys
+import tempfile
+import zipfile
 import zlib
 from pathlib import Path
 
@@ -42,7 +47,7 @@ import numpy as np
 from ._io import atomic_write
 
 __all__ = ["DEPTH_CHANNELS", "NORMAL_CHANNELS", "SUFFIXES", "read_buffers", "read_gbuffer", "write_image",
-           "write_gbuffer", "read_pfm", "write_pfm", "exr_channels"]
+           "write_gbuffer", "read_pfm", "write_pfm", "exr_channels", "EXR_MAX_PIXELS"]
 
 #: Depth channel names tried in order when ``depth_channel`` is not given: what Blender's
 #: compositor File Output node writes to a multilayer file for a float input named Depth
@@ -163,6 +168,10 @@ def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_
     ((2, 3), (2, 3, 3), True)
     """
     depth_path, normal_path = _paths(path_or_paths, normal_path)
+    normal_channels = _check_normal_channels(normal_channels)
+    if depth_channel is not None and not (isinstance(depth_channel, str) and depth_channel):
+        raise ValueError(f"depth_channel must be a channel name (a non-empty string) or None, got {depth_channel!r}")
+    depth_scale = _check_depth_scale(depth_scale)
     found: dict = {}
     cache: dict = {}   # each file is opened once; .npz archives are closed below
     try:
@@ -180,6 +189,36 @@ def read_buffers(path_or_paths, *, normal_path=None, depth_channel=None, normal_
         raise ValueError(f"the normals {found['normal']} are {normal.shape[1]}x{normal.shape[0]} pixels but "
                          f"the depth {found['depth']} is {depth.shape[1]}x{depth.shape[0]}; they must match")
     return depth, normal, found
+
+
+def _check_normal_channels(spec):
+    """None, a layer name (or "X,Y,Z"), or three channel names; anything else is an error."""
+    if spec is None or (isinstance(spec, str) and spec.strip()):
+        return spec
+    if not isinstance(spec, str):
+        try:
+            names = tuple(spec)
+        except TypeError:
+            names = None
+        if names is not None and len(names) == 3 and all(isinstance(n, str) and n for n in names):
+            return names
+    raise ValueError(f"normal_channels must be None (found automatically), a layer name such as 'Normal' or "
+                     f"'View Layer.Normal', or three channel names such as ('N.X', 'N.Y', 'N.Z') or "
+                     f"'N.X,N.Y,N.Z'; got {spec!r}")
+
+
+def _check_depth_scale(depth_scale):
+    """None or a finite number > 0 (a numeric string as on the command line is accepted)."""
+    if depth_scale is None:
+        return None
+    try:
+        value = float(depth_scale)
+    except (TypeError, ValueError):
+        value = None
+    if isinstance(depth_scale, bool) or value is None or not (np.isfinite(value) and value > 0):
+        raise ValueError(f"depth_scale must be a finite number > 0 (scene units per stored depth unit), "
+                         f"got {depth_scale!r}")
+    return value
 
 
 def _paths(path_or_paths, normal_path):
@@ -220,10 +259,7 @@ def _check_camera(camera, shape, source) -> None:
 
 def _read_depth(path, channel, depth_scale, found, cache) -> np.ndarray:
     suffix = path.suffix.lower()
-    if depth_scale is not None:
-        depth_scale = float(depth_scale)
-        if not (np.isfinite(depth_scale) and depth_scale > 0):
-            raise ValueError(f"depth_scale must be a finite number > 0, got {depth_scale!r}")
+    depth_scale = _check_depth_scale(depth_scale)
     if suffix == ".exr":
         channels = _exr_cached(path, cache)
         name = channel if channel is not None else _default_depth(channels, path)
@@ -393,6 +429,12 @@ def _openexr():
     return OpenEXR
 
 
+#: The most pixels an EXR's data windows may hold together (the parts' width x height summed):
+#: 2^28, a 16384 x 16384 frame, 1 GiB per float32 channel. A header claiming more is refused
+#: before any pixel is read (a damaged one can claim 10^10, and the reader would allocate it).
+EXR_MAX_PIXELS = 1 << 28
+
+
 def exr_channels(path) -> dict[str, np.ndarray]:
     """Every channel of an OpenEXR file, by name, as (H, W) arrays (float16/float32/uint32).
 
@@ -401,22 +443,43 @@ def exr_channels(path) -> dict[str, np.ndarray]:
     starts with the part's name (Blender's multilayer files: part ``ViewLayer.Depth`` holds
     ``ViewLayer.Depth.Z``).
 
+    The header is read first: data windows of more than :data:`EXR_MAX_PIXELS` pixels, or
+    whose channels would not fit in the memory available, are refused before any pixel is read.
+
     Raises
     ------
     FileNotFoundError
         No such file.
     ValueError
-        Not a readable OpenEXR file (a truncated or damaged one, another format): the message
-        names the file.
+        ``not a readable EXR file: PATH (reason)``: a truncated or damaged file, another
+        format, pixel data that cannot be decoded, or a data window too large.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such file: {path}")
     OpenEXR = _openexr()
-    try:
-        f = OpenEXR.File(str(path), separate_channels=True)
-    except Exception as exc:  # the bindings raise RuntimeError (and print to stderr)
-        raise ValueError(f"{path}: not a readable OpenEXR file ({exc})") from None
+    with _exr_messages() as said:
+        try:
+            head = OpenEXR.File(str(path), header_only=True)
+        except Exception as exc:  # the bindings raise RuntimeError (and print the detail to stderr)
+            error = exc
+        else:
+            error = None
+    if error is not None:
+        raise ValueError(f"not a readable EXR file: {path} ({_exr_reason(said, error)})") from None
+    declared = [[c.name for c in part.header.get("channels", [])] for part in head.parts]
+    _check_exr_size(path, head)
+    with _exr_messages() as said:
+        try:
+            f = OpenEXR.File(str(path), separate_channels=True)
+        except Exception as exc:
+            error = exc
+    if error is not None:
+        raise ValueError(f"not a readable EXR file: {path} ({_exr_reason(said, error)})") from None
+    if len(f.parts) != len(declared) or any(names and not part.channels for names, part in zip(declared, f.parts)):
+        # the bindings print a failed pixel read and return the part without channels
+        raise ValueError(f"not a readable EXR file: {path} (the pixel data cannot be read: "
+                         f"{_exr_reason(said, None)})")
     out: dict[str, np.ndarray] = {}
     for part in f.parts:
         pname = part.name() if callable(getattr(part, "name", None)) else ""
@@ -426,6 +489,72 @@ def exr_channels(path) -> dict[str, np.ndarray]:
             if pname and not name.startswith(f"{pname}."):   # Blender names its parts after the layer
                 out.setdefault(f"{pname}.{name}", pixels)
     return out
+
+
+@contextlib.contextmanager
+def _exr_messages():
+    """Collect what the OpenEXR bindings print while reading: their warnings go to Python's
+    stdout, the library's error detail to the process's stderr (file descriptor 2). Yields a
+    list that holds the lines once the block is left."""
+    said: list[str] = []
+    sys.stderr.flush()
+    with tempfile.TemporaryFile() as tmp, contextlib.redirect_stdout(io.StringIO()) as printed:
+        saved = os.dup(2)
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            said.extend(tmp.read().decode("utf-8", "replace").splitlines())
+            said.extend(printed.getvalue().splitlines())
+
+
+def _exr_reason(said, error) -> str:
+    """The library's own detail (its first line, the file's path dropped) else the exception's."""
+    for line in said:
+        line = " ".join(line.split())
+        if line:
+            head, sep, tail = line.partition(": ")
+            return tail if sep and head.endswith(".exr") else line
+    return " ".join(str(error).split()) if error is not None else "no detail given"
+
+
+def _check_exr_size(path, head) -> None:
+    """Refuse data windows above :data:`EXR_MAX_PIXELS` pixels or above the memory available."""
+    pixels, values, sizes = 0, 0, []
+    for part in head.parts:
+        lo, hi = (np.asarray(v, dtype=np.int64) for v in part.header["dataWindow"])
+        W, H = (int(n) for n in hi - lo + 1)
+        if W <= 0 or H <= 0:
+            raise ValueError(f"not a readable EXR file: {path} (its data window is {W} x {H} pixels)")
+        sizes.append(f"{W} x {H}")
+        pixels += W * H
+        values += W * H * max(len(part.header.get("channels", [])), 1)
+    if pixels > EXR_MAX_PIXELS:
+        raise ValueError(f"not a readable EXR file: {path} (its header claims a data window of {', '.join(sizes)} "
+                         f"= {pixels} pixels, more than the {EXR_MAX_PIXELS} this reader accepts; a damaged header?)")
+    available = _available_memory()
+    if available is not None and 4 * values > available:
+        raise ValueError(f"not a readable EXR file: {path} (its {', '.join(sizes)} pixels need up to "
+                         f"{_bytes(4 * values)}, and {_bytes(available)} of memory is available)")
+
+
+def _bytes(n: int) -> str:
+    """A byte count for people: ``16 KiB``, ``37.3 GiB``."""
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{n} B"
+        n /= 1024
+
+
+def _available_memory() -> int | None:
+    """Bytes of physical memory available now (None where the system does not say)."""
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
 
 
 def _exr_cached(path, cache) -> dict:
@@ -449,20 +578,47 @@ def _exr_bytes(channels: dict, *, compression="zip"):
 
 
 # --------------------------------------------------------------------------- NumPy
+#: What NumPy raises for a damaged ``.npy`` or ``.npz`` file: a truncated or empty file, a bad
+#: zip directory or member, a broken compressed stream.
+_NUMPY_FILE_ERRORS = (ValueError, OSError, EOFError, zlib.error, zipfile.BadZipFile)
+
+
+def _reason(exc: BaseException) -> str:
+    """A damaged file's error as one line, its type named."""
+    text = " ".join(str(exc).split())
+    if isinstance(exc, EOFError):
+        text = "the file is empty or ends early"
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
 def _npy(path) -> np.ndarray:
-    try:
-        return np.load(path, allow_pickle=False)
-    except ValueError as exc:
-        raise ValueError(f"{path}: not a plain NumPy array file ({exc}); pickled objects are refused") from None
+    # our own handle, closed on every path: np.load(path) leaks it when the file is damaged
+    with open(path, "rb") as fh:
+        try:
+            array = np.load(fh, allow_pickle=False)
+            if not isinstance(array, np.ndarray):
+                array.close()
+                raise ValueError("a zip archive of named arrays (.npz content), not one array")
+            return array
+        except _NUMPY_FILE_ERRORS as exc:
+            if "allow_pickle" in str(exc):
+                raise ValueError(f"not a readable NPY file: {path} (it holds pickled Python objects; pickled "
+                                 f"objects are refused: a pickle can run code when loaded)") from None
+            raise ValueError(f"not a readable NPY file: {path} ({_reason(exc)})") from None
 
 
 def _npz_cached(path, cache):
     key = ("npz", Path(path).resolve())
     if key not in cache:
+        fh = open(path, "rb")   # closed by read_buffers with the archive: np.load(path) leaks on a damaged file
         try:
-            cache[key] = np.load(path, allow_pickle=False)
-        except (ValueError, OSError, zlib.error) as exc:
-            raise ValueError(f"{path}: not a readable .npz archive ({exc})") from None
+            archive = np.load(fh, allow_pickle=False)
+            if not hasattr(archive, "files"):
+                raise ValueError("a single array (.npy content), not a zip archive of named arrays")
+        except _NUMPY_FILE_ERRORS as exc:
+            fh.close()
+            raise ValueError(f"not a readable NPZ file: {path} ({_reason(exc)})") from None
+        cache[key], cache[key + ("handle",)] = archive, fh
     return cache[key]
 
 
@@ -473,8 +629,12 @@ def _npz_array(path, key, cache) -> np.ndarray:
     try:
         return archive[key]
     except ValueError as exc:
+        if "allow_pickle" not in str(exc):
+            raise ValueError(f"not a readable NPZ file: {path} (array {key!r}: {_reason(exc)})") from None
         raise ValueError(f"{path}: the array {key!r} holds Python objects, which are refused (a pickle can run "
                          f"code when loaded); save plain numeric arrays ({exc})") from None
+    except _NUMPY_FILE_ERRORS as exc:
+        raise ValueError(f"not a readable NPZ file: {path} (array {key!r}: {_reason(exc)})") from None
 
 
 # --------------------------------------------------------------------------- PFM
@@ -492,7 +652,12 @@ def read_pfm(path) -> np.ndarray:
     m = _PFM_HEADER.match(data[:256])
     if m is None:
         raise ValueError(f"{path}: not a PFM file (expected a 'Pf' or 'PF' header, width, height and scale)")
-    magic, W, H, scale = m.group(1), int(m.group(2)), int(m.group(3)), float(m.group(4))
+    magic, W, H = m.group(1), int(m.group(2)), int(m.group(3))
+    try:
+        scale = float(m.group(4))
+    except ValueError:
+        raise ValueError(f"{path}: the PFM scale line must be a number (its sign gives the byte order), "
+                         f"got {m.group(4).decode('ascii', 'replace')!r}") from None
     if scale == 0 or not np.isfinite(scale):
         raise ValueError(f"{path}: the PFM scale must be a non-zero number, got {scale}")
     C = 3 if magic == b"PF" else 1
@@ -590,6 +755,9 @@ def write_image(path, visibility, *, background=None, bits=8, channel="Y") -> Pa
         raise ValueError(f"visibility must be an (H, W) image, got shape {v.shape}")
     if v.dtype.kind not in "fiu":
         raise ValueError(f"visibility must be numbers, got dtype {v.dtype}")
+    if v.size == 0:
+        raise ValueError(f"visibility is an empty {v.shape[0]} x {v.shape[1]} image; an image file needs at "
+                         f"least one pixel")
     suffix = path.suffix.lower()
     if suffix != ".png" and background is not None:
         raise ValueError(f"background is a PNG colour; {suffix} files keep NaN on background")

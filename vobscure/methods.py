@@ -280,7 +280,7 @@ class Method:
         >>> get("line").run(gb, radius=0.5, thicknes=0.1)
         Traceback (most recent call last):
         ...
-        ValueError: no registered method takes the option(s) 'thicknes'; method 'line' takes falloff, fetch, noise_size, normal_clamp, offscreen, radius, randomize, samples, seed, thickness
+        ValueError: no registered method takes the option(s) 'thicknes'; method 'line' takes falloff, fetch, frame, noise_size, normal_clamp, offscreen, radius, randomize, samples, schedule, seed, thickness
         """
         out = crop_guard(self._call(gbuffer, samples, fetch, options), gbuffer)
         value = out.value if isinstance(out, Estimate) else out
@@ -444,11 +444,16 @@ def parse(spec) -> tuple[Config, ...]:
                              f"{', '.join(_REGISTRY)}")
         count, _, fetch = rest.partition(":")
         count = count.strip()
-        if count and not count.isdigit():
+        # ASCII decimal digits only: str.isdigit accepts superscripts such as '²', which int() rejects
+        if count and not (count.isascii() and count.isdecimal()):
             raise ValueError(f"--methods entry {item!r} must be NAME[:SAMPLES[:FETCH]] with SAMPLES a "
-                             f"positive integer, e.g. 'line:9' or 'point:12:nearest'")
+                             f"positive integer in ASCII digits 0-9, got SAMPLES {count!r}; e.g. 'line:9' "
+                             f"or 'point:12:nearest'")
         samples = int(count) if count else _REGISTRY[name].default_samples
-        out.append(Config(name, samples, fetch=fetch.strip() or None))
+        try:
+            out.append(Config(name, samples, fetch=fetch.strip() or None))
+        except ValueError as exc:
+            raise ValueError(f"--methods entry {item!r}: {exc}") from None
     if len(set(out)) != len(out):
         raise ValueError(f"--methods lists a configuration twice: {', '.join(c.label for c in out)}")
     return tuple(out)

@@ -9,7 +9,7 @@ cache, and the figure modules (``figures/``).
 import importlib
 
 #: The submodules.
-_MODULES = ("cache", "claims", "compare", "figures", "sweeps")
+_MODULES = ("cache", "claims", "compare", "figures", "sweeps", "temporal")
 #: Names of :mod:`vobscure.experiments.sweeps` exported here.
 _SWEEPS = ("sweep", "SweepConfig", "SweepResult", "InlineExecutor", "results_to_csv", "results_to_markdown")
 

@@ -265,6 +265,10 @@ class ReferenceCache:
         The cache folder; default :func:`default_directory`. Created on the first write.
     enabled : bool
         False: :meth:`get_or_compute` always computes and nothing is read or written.
+    on_error : {"raise", "warn"}
+        When the folder or an entry cannot be written: ``"raise"`` a :class:`CacheError`
+        (before any computing), or ``"warn"`` once with a :class:`CacheWarning` and go on
+        without storing (entries already there are still read).
 
     Notes
     -----
@@ -287,14 +291,17 @@ class ReferenceCache:
     >>> tmp.cleanup()
     """
 
-    def __init__(self, directory=None, *, enabled: bool = True):
+    def __init__(self, directory=None, *, enabled: bool = True, on_error: str = "raise"):
+        check_choice(on_error, "on_error", ("raise", "warn"))
         if directory is None:
             directory = default_directory()
         elif not isinstance(directory, (str, os.PathLike)):
             raise ValueError(f"directory must be a path (str or Path) or None, got {type(directory).__name__}")
         self.directory = Path(directory).expanduser()
         self.enabled = bool(enabled)
+        self.on_error = on_error
         self._writable = False
+        self._unwritable = False   # on_error="warn" and the folder cannot be written: read only
 
     def __repr__(self) -> str:
         return f"ReferenceCache({str(self.directory)!r}, enabled={self.enabled})"
@@ -308,7 +315,8 @@ class ReferenceCache:
 
     def __getstate__(self):
         # the writability probe is per process: a worker on another machine checks again
-        return {"directory": self.directory, "enabled": self.enabled, "_writable": False}
+        return {"directory": self.directory, "enabled": self.enabled, "on_error": self.on_error,
+                "_writable": False, "_unwritable": False}
 
     # ------------------------------------------------------------------ paths
     def key(self, key_fields: Mapping) -> str:
@@ -321,22 +329,36 @@ class ReferenceCache:
         label = "".join(c if c.isalnum() or c in "-_" else "_" for c in label)[:40] or "entry"
         return self.directory / f"{label}-{self.key(key_fields)}.npz"
 
-    def _ensure_writable(self) -> None:
-        """Create the folder and check that a file can be made in it, before any computing."""
-        if self._writable:
-            return
+    def _ensure_writable(self) -> bool:
+        """Create the folder and check that a file can be made in it, before any computing.
+
+        False (after one :class:`CacheWarning`) when it cannot and ``on_error="warn"``: the
+        cache is then read only; else a :class:`CacheError`.
+        """
+        if self._writable or self._unwritable:
+            return self._writable
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryFile(dir=self.directory, prefix=".probe-"):
                 pass
         except OSError as exc:
+            reason = f"{type(exc).__name__}: {exc.strerror or exc}"
+            if self.on_error == "warn":
+                self._unwritable = True
+                if not self.directory.is_dir():
+                    self.enabled = False   # nothing to read either (a job's provenance then names no cache)
+                warnings.warn(f"cannot write the reference cache directory {str(self.directory)!r} ({reason}); "
+                              f"continuing without caching (references are computed, not stored)",
+                              CacheWarning, stacklevel=4)
+                return False
             raise CacheError(
                 f"cannot write the reference cache directory {str(self.directory)!r} "
-                f"({type(exc).__name__}: {exc.strerror or exc}). Choose another directory "
+                f"({reason}). Choose another directory "
                 f"(ReferenceCache(directory=...), the {CACHE_ENV} environment variable) or "
                 f"disable the cache (ReferenceCache(enabled=False))."
             ) from exc
         self._writable = True
+        return True
 
     # ------------------------------------------------------------------ load / store
     def load(self, key_fields: Mapping, *, expected: Mapping | None = None):
@@ -358,6 +380,10 @@ class ReferenceCache:
         key = self.key(key_fields)
         path = self.path(key_fields)
         if not path.exists():
+            return None
+        if not path.is_file():
+            warnings.warn(f"reference cache entry {str(path)!r} is not a file (a folder of that name?); "
+                          f"computing the reference without the cache", CacheWarning, stacklevel=3)
             return None
         try:
             return self._read(path, key, expected)
@@ -427,12 +453,12 @@ class ReferenceCache:
         Raises
         ------
         CacheError
-            When the folder cannot be created or written.
+            When the folder cannot be created or written (with ``on_error="warn"``: a
+            :class:`CacheWarning`, and None is returned).
         """
         kind, arrays, extra = _as_arrays(result, "result")
-        if not self.enabled:
+        if not self.enabled or not self._ensure_writable():
             return None
-        self._ensure_writable()
         versioned = _versioned(key_fields)
         provenance = {
             "format": CACHE_FORMAT,
@@ -449,9 +475,15 @@ class ReferenceCache:
             **extra,
         }
         path = self.path(key_fields)
+        if self.on_error == "warn" and path.exists() and not path.is_file():
+            return None     # load() warned about what is in the way
         try:
             return save_npz(path, provenance, **arrays)
         except OSError as exc:
+            if self.on_error == "warn":
+                warnings.warn(f"cannot write the reference cache entry {str(path)!r} ({type(exc).__name__}: "
+                              f"{exc.strerror or exc}); continuing without caching it", CacheWarning, stacklevel=3)
+                return None
             raise CacheError(f"cannot write the reference cache entry {str(path)!r} "
                              f"({type(exc).__name__}: {exc})") from exc
 
@@ -489,7 +521,8 @@ class ReferenceCache:
         Raises
         ------
         CacheError
-            When the folder cannot be written; raised before ``compute`` is called.
+            When the folder cannot be written; raised before ``compute`` is called (with
+            ``on_error="warn"``: one :class:`CacheWarning`, then computed and not stored).
         """
         if not callable(compute):
             raise ValueError(f"compute must be a callable with no arguments, got {type(compute).__name__}")
@@ -510,6 +543,19 @@ class ReferenceCache:
 
 
 # ----------------------------------------------------------------------------- helpers
+def open_cache(cache) -> ReferenceCache:
+    """The cache a job's ``cache`` argument names: True the default user folder, a path that
+    folder, False or None no cache, a :class:`ReferenceCache` itself. A folder it opens warns
+    and is used read only when it cannot be written (``on_error="warn"``): the job goes on."""
+    if isinstance(cache, ReferenceCache):
+        return cache
+    if cache is True:
+        return ReferenceCache(on_error="warn")
+    if cache is False or cache is None:
+        return ReferenceCache(enabled=False)
+    return ReferenceCache(cache, on_error="warn")
+
+
 def _as_cache(cache) -> ReferenceCache:
     if cache is None:
         return ReferenceCache(enabled=False)

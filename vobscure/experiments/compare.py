@@ -24,7 +24,8 @@ With ``thickness="layers"`` the G-buffer is depth-peeled to ``layers`` surfaces 
 the methods whose registry entry reads layers (:attr:`vobscure.methods.Method.thickness_kinds`)
 take their thickness from its solid intervals; the verdict says which did.
 
-Outputs (all written atomically into ``out``): ``results.csv``, ``results.md`` (verdict, then
+Outputs (written into ``out`` as one set that replaces the previous run's as a whole,
+:func:`vobscure._io.file_set`): ``results.csv``, ``results.md`` (verdict, then
 the table), ``summary.json`` (the verdict as data), ``tradeoff.png`` (error against time, taps
 and texels per pixel, one curve per method, the Pareto front marked), ``gallery.png`` (each
 estimate beside the references and its error map) and ``provenance.json``. With ``orbit`` > 1,
@@ -42,10 +43,12 @@ from pathlib import Path
 import numpy as np
 
 from .. import methods as _methods
+from .._io import check_writable_dir, file_set
 from .. import references as _references
 from .._validate import check_choice, check_int, check_positive
 from .common import (choose_radius, machine, markdown_table, new_figure, save_figure, write_csv, write_json,
                      write_text)
+from .cache import open_cache
 from .sweeps import DEFAULT_LAYERS, REFERENCES, InlineExecutor, SweepConfig, check_thickness, sweep
 from .verdict import POOR_RMSE, SUGGEST_MIN_GAIN, TARGET_FACTOR, layers_sentence, pareto_front, thin_sentence, verdict
 
@@ -62,8 +65,8 @@ VEGETATION_METHODS = "hegeman,hegeman_ellipsoid,hegeman_multishell,reeves_blau,p
 #: Sizes of the default and the quick run.
 DEFAULT_SIZE = (256, 256)
 QUICK_SIZE = (64, 64)
-#: Metrics kept per reference.
-METRICS = ("rmse", "mae", "bias", "ssim")
+#: Metrics kept per reference (fields of :class:`~vobscure.metrics.ErrorReport`; flip: the mean FLIP).
+METRICS = ("rmse", "mae", "bias", "ssim", "flip")
 #: Thicknesses (fractions of the radius) tried when the screen-space error dominates.
 SUGGEST_THICKNESS = (0.25, 0.5, 1.0, 2.0)
 
@@ -71,19 +74,11 @@ parse_methods = _methods.parse
 
 
 def orbit_cameras(camera, frames: int, *, degrees: float = 10.0):
-    """``frames`` cameras turning about the vertical axis through the target, ``degrees`` in all."""
-    from ..camera import Camera
+    """``frames`` cameras turning about the vertical axis through the target, ``degrees`` in all
+    (centred on ``camera``; :func:`vobscure.temporal.orbit_camera`)."""
+    from ..temporal import orbit_camera
 
-    d = camera.to_dict()
-    eye, target = np.array(d["eye"], float), np.array(d["target"], float)
-    rel = eye - target
-    out = []
-    for t in np.linspace(-0.5, 0.5, frames) * math.radians(degrees):
-        c, s = math.cos(t), math.sin(t)
-        e = target + np.array([c * rel[0] + s * rel[2], rel[1], -s * rel[0] + c * rel[2]])
-        kw = dict(fov_y=d["fov_y"]) if d["ortho_height"] is None else dict(ortho_height=d["ortho_height"])
-        out.append(Camera.look_at(e, target, d["up"], size=tuple(d["size"]), **kw))
-    return out
+    return [orbit_camera(camera, a) for a in np.linspace(-0.5, 0.5, frames) * degrees]
 
 
 class Stages:
@@ -165,18 +160,6 @@ class CompareResult:
     images: dict = field(repr=False, default_factory=dict)
 
 
-def _as_cache(cache):
-    from .cache import ReferenceCache
-
-    if isinstance(cache, ReferenceCache):
-        return cache
-    if cache is True:
-        return ReferenceCache()
-    if cache is False or cache is None:
-        return ReferenceCache(enabled=False)
-    return ReferenceCache(cache)
-
-
 def _names(items, limit: int = 6) -> str:
     items = list(items)
     shown = ", ".join(items[:limit])
@@ -249,7 +232,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
             screen_samples: int = _references.SCREEN_SAMPLES, seed: int = 0,
             orbit: int = 0, target_rmse=None, budget_ms=None, suggest: bool = True, quick: bool = False,
             out=None, cache=True, progress: bool = False, plots: bool = True,
-            write: bool = True, allow_open: bool = False) -> CompareResult:
+            write: bool = True, allow_open: bool = False, frames: int = 0, motion: str = "static",
+            step=None, cameras=None, schedules="white", accumulate="mean", clamp: bool = False, reproject: bool = True,
+            denoise=None) -> CompareResult:
     """Measure error, time and taps per pixel of screen-space estimators on one scene, and say
     which to use.
 
@@ -333,6 +318,19 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     allow_open : bool
         Compute ``"volumetric"`` on a scene that is not closed (an inside test that may be wrong
         near the holes) instead of replacing it by ``"shell"``.
+    frames : int
+        With N >= 2 (or ``cameras``), also the error after N frames
+        (:func:`vobscure.experiments.temporal.run`, ``docs/temporal.md``): every configuration
+        run per frame with its noise ``schedules`` and ``accumulate`` settings (all
+        combinations), over the camera path ``motion`` (``"static"``, ``"orbit"``, ``"dolly"``)
+        or ``cameras``, scored per frame against ``"screen"`` and its own reference at the first
+        radius; the rows go to ``temporal.csv``, the curves to ``temporal.png``, the sentences to
+        the verdict and ``summary["temporal"]`` lists ``{"config", "reference", "rmse"}``.
+    motion, step, cameras, schedules, accumulate, clamp, reproject, denoise
+        The sequence's camera path (``step``: per frame, :func:`vobscure.temporal.camera_path`), noise schedules (``"white"``, ``"rotate"``, ``"r2"``,
+        ``"gtao"``, ``"blue"``; comma-separated or a list), accumulation settings (``"mean"``,
+        ``"ema:ALPHA"``, ``"clip:ALPHA"``) and accumulator options
+        (:class:`vobscure.temporal.Accumulator`); used only with ``frames``.
 
     Returns
     -------
@@ -367,6 +365,8 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         sc, scene_name = scene, name or "gbuffer"
         if orbit:
             raise ValueError("orbit needs a scene to render from other viewpoints; a G-buffer is one view")
+        if frames or cameras is not None:
+            raise ValueError("frames needs a scene to render every frame's view; a G-buffer is one frame")
     else:
         sc, scene_name = resolve(scene)
     vegetation = "canopy_points" in (getattr(sc, "metadata", None) or {})
@@ -403,6 +403,7 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                                "near the holes")
     repeats = check_int(repeats, "repeats")
     orbit = check_int(orbit, "orbit", minimum=0) if orbit else 0
+    frames = check_int(frames, "frames", minimum=0) if frames else 0
     thickness, layers = check_thickness(thickness, layers, frame=sc if frame else None)
     if target_rmse is not None:
         target_rmse = check_positive(target_rmse, "target_rmse")
@@ -436,8 +437,10 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
         radius_choice = choose_radius(sc, view_gb)
         radii = (radius_choice.radius,)
     radii = tuple(check_positive(r, "radius") for r in np.atleast_1d(radii))
-    store = _as_cache(cache)
+    store = open_cache(cache)
     out = Path(out) if out is not None else Path("vobscure-out") / f"compare-{scene_name}"
+    if write:
+        check_writable_dir(out, "out")   # before the work, not after it
 
     t_start = time.perf_counter()
     stages = Stages()
@@ -471,6 +474,25 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
     if thickness_trials:
         stages.add("thickness trials", time.perf_counter() - t0, "computed")
     summary = verdict(rows, target_rmse=target_rmse, budget_ms=budget_ms, thickness_trials=thickness_trials)
+    sequence = None
+    if frames > 1 or cameras is not None:
+        from . import temporal as _temporal
+
+        t0 = time.perf_counter()
+        tconfigs = _temporal.configurations(configs, schedules=schedules, accumulate=accumulate, clamp=clamp,
+                                            reproject=reproject, denoise=denoise)
+        sequence = _temporal.run(sc, tconfigs, camera=camera, frames=frames if frames > 1 else None,
+                                 motion=motion, step=step, cameras=cameras, radius=radii[0],
+                                 references=tuple(r for r in references if r == "screen" or r in
+                                                  {c.reference(normal_clamp) for c in configs} | set(missing.values())),
+                                 normal_clamp=normal_clamp, thickness=thickness, rays=rays,
+                                 screen_samples=screen_samples, volume_samples=volume_samples, seed=seed,
+                                 target_rmse=target_rmse, cache=store, progress=progress, allow_open=allow_open)
+        stages.add(f"frames ({len(sequence.cameras)} x {len(tconfigs)} configurations)",
+                   time.perf_counter() - t0, "computed")
+        summary["temporal"] = sequence.series
+        summary["temporal_verdict"] = {k: v for k, v in sequence.summary.items() if k != "text"}
+        summary["text"] += sequence.summary["text"]
     summary["thin_band"] = thin_band
     summary["text"] += [thin_sentence(band, rows) for band in thin_band if band["pixels"]]
     if thickness == "layers":
@@ -501,20 +523,25 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
                           for r in radii} if "shell" in references else None),
         repeats=repeats, rays=rays, volume_samples=volume_samples,
         screen_samples=screen_samples, seed=seed, orbit=orbit, quick=bool(quick),
+        temporal=None if sequence is None else dict(
+            frames=len(sequence.cameras), motion="list" if cameras is not None else motion,
+            cameras=sequence.cameras, schedules=schedules, accumulate=accumulate, clamp=bool(clamp),
+            reproject=bool(reproject), denoise=denoise),
         target_rmse=target_rmse, budget_ms=budget_ms,
         cache=None if not store.enabled else str(store.directory),
         cache_hits={f"{r:g}": h for r, h in hits.items()}, stages=stages.records,
         seconds=time.perf_counter() - t_view,
         machine=machine(), date=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
-    files = _write(out, rows, summary, provenance, all_refs, images, gb, plots) if write else {}
+    files = _write(out, rows, summary, provenance, all_refs, images, gb, plots, sequence) if write else {}
     return CompareResult(rows=rows, summary=summary, files=files, provenance=provenance,
                          references=all_refs, images=images)
 
 
 def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness, layers, screen_samples, seed,
            cache, progress):
-    """Add ``flicker`` (estimate minus reference) and ``flicker_raw`` to every row: the same
-    configurations over an orbit of cameras, measured (not timed) by the sweep."""
+    """Add ``flicker`` (estimate minus reference), ``flicker_raw`` and ``flicker_flip`` (FLIP of
+    each frame against the previous one) to every row: the same configurations over an orbit of
+    cameras, measured (not timed) by the sweep."""
     from ..metrics import flicker
 
     cams = orbit_cameras(camera, frames)
@@ -534,6 +561,7 @@ def _orbit(sc, camera, rows, configs, radii, frames, *, normal_clamp, thickness,
         f = flicker(np.stack(seq[key]), np.stack(refs[key]))
         row["flicker"] = float(f.value)
         row["flicker_raw"] = float(f.estimate_change)
+        row["flicker_flip"] = float(f.estimate_flip)     # FLIP of each frame against the one before
 
 
 def _thickness_trials(rows, images, refs, gb, *, normal_clamp, seed, repeats) -> list[dict]:
@@ -623,16 +651,24 @@ def _markdown(rows, summary, provenance) -> str:
     return "\n".join(lines)
 
 
-def _write(out: Path, rows, summary, provenance, refs, images, gb, plots) -> dict:
-    out.mkdir(parents=True, exist_ok=True)
-    files = {"results.csv": write_csv(out / "results.csv", rows),
-             "results.md": write_text(out / "results.md", _markdown(rows, summary, provenance)),
-             "summary.json": write_json(out / "summary.json", summary)}
-    if plots:
-        files["tradeoff.png"] = _tradeoff(out / "tradeoff.png", rows, provenance)
-        files["gallery.png"] = _gallery(out / "gallery.png", rows, refs, images, gb)
-    files["provenance.json"] = write_json(out / "provenance.json", provenance)
-    return files
+def _write(out: Path, rows, summary, provenance, refs, images, gb, plots, sequence=None) -> dict:
+    """Write the run's files as one set (:func:`vobscure._io.file_set`): they replace the
+    previous run's set in ``out`` as a whole, or, when the run is interrupted, not at all."""
+    with file_set(out, "compare") as stage:
+        names = [write_csv(stage / "results.csv", rows).name,
+                 write_text(stage / "results.md", _markdown(rows, summary, provenance)).name,
+                 write_json(stage / "summary.json", summary).name]
+        if sequence is not None:
+            names.append(write_csv(stage / "temporal.csv", sequence.rows).name)
+        if plots:
+            names.append(_tradeoff(stage / "tradeoff.png", rows, provenance).name)
+            names.append(_gallery(stage / "gallery.png", rows, refs, images, gb).name)
+            if sequence is not None:
+                from .temporal import plot as plot_temporal
+
+                names.append(plot_temporal(stage / "temporal.png", sequence).name)
+        names.append(write_json(stage / "provenance.json", provenance).name)
+    return {name: out / name for name in names}
 
 
 _METHOD_COLORS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22")

@@ -51,7 +51,7 @@ from .._validate import check_choice, check_int, check_positive
 from ..metrics import DECOMPOSITION_TERMS
 from .common import default_radius, progress_bar, write_text
 
-__all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "results_to_csv",
+__all__ = ["SweepConfig", "SweepResult", "InlineExecutor", "sweep", "view", "view_reference", "results_to_csv",
            "results_to_markdown", "check_thickness", "REFERENCES", "TIMING_FIELDS", "DEFAULT_SIZE",
            "DEFAULT_WORKERS", "DEFAULT_LAYERS"]
 
@@ -524,7 +524,7 @@ def view(config: SweepConfig, stages: _Stages | None = None):
     return result
 
 
-def _reference(name: str, config: SweepConfig, scene, gb, radius: float, cache, stages: _Stages | None = None,
+def view_reference(name: str, config: SweepConfig, scene, gb, radius: float, cache, stages: _Stages | None = None,
                progress: bool = False):
     """(Estimate, cache hit) of the reference ``name`` of the configuration's view, made once
     per worker: the registry entry's arguments, computed through the disk cache. ``stages``
@@ -565,7 +565,7 @@ def _run_config(config: SweepConfig, cache, keep_image: bool, progress: bool = F
     stages = _Stages()
     scene, camera, gb = view(config, stages)
     radius = config.radius if config.radius is not None else default_radius(scene if scene is not None else gb)
-    made = {name: _reference(name, config, scene, gb, radius, cache, stages, progress) for name in config.references}
+    made = {name: view_reference(name, config, scene, gb, radius, cache, stages, progress) for name in config.references}
     refs = {name: est for name, (est, _) in made.items()}
     mc = config.method_config
     kwargs = dict(radius=radius, normal_clamp=config.normal_clamp, thickness=config.thickness,

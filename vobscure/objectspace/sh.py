@@ -41,6 +41,7 @@ numbered paper (see ``docs/sphere-sets.md``).
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from functools import lru_cache
 from math import factorial
@@ -78,8 +79,17 @@ def sh_index(l: int, m: int) -> int:
     --------
     >>> sh_index(0, 0), sh_index(1, -1), sh_index(2, 2)
     (0, 1, 8)
+
+    Raises
+    ------
+    ValueError
+        If l is not an integer >= 0 or m not an integer with |m| <= l (outside that range
+        the formula would alias another coefficient: (2, 3) would be (3, -3)).
     """
-    return l * (l + 1) + m
+    l = check_int(l, "l", minimum=0)
+    if isinstance(m, bool) or not isinstance(m, numbers.Integral) or abs(m) > l:
+        raise ValueError(f"m must be an integer with |m| <= l = {l}, got {m!r}")
+    return l * (l + 1) + int(m)
 
 
 def _check_order(order) -> int:
@@ -89,13 +99,29 @@ def _check_order(order) -> int:
     return order
 
 
+#: How far from 1 the length of a direction given to :func:`sh_basis` or :func:`rotate_zonal`
+#: may be (the basis is a polynomial in x, y, z, so a longer or shorter vector gives values
+#: of no direction; float32 unit vectors are within 1e-7).
+UNIT_TOL = 1e-3
+
+
+def _check_unit(d: np.ndarray, name: str) -> None:
+    length = np.sqrt(np.einsum("...i,...i->...", d, d))
+    bad = ~(np.abs(length - 1.0) <= UNIT_TOL)                  # NaN fails too
+    if np.any(bad):
+        raise ValueError(f"{name} must be unit vectors (|d| within {UNIT_TOL} of 1); {int(np.count_nonzero(bad))} "
+                         f"are not, e.g. |d| = {float(np.ravel(length)[np.ravel(bad)][0])!r} (a zero direction "
+                         f"has no axis)")
+
+
 def sh_basis(directions, order: int = 4) -> np.ndarray:
     r"""The real SH basis :math:`y_i(\omega)` of order ``order`` at unit directions.
 
     Parameters
     ----------
     directions : (..., 3) float
-        Unit vectors (not renormalized; the basis is a polynomial in x, y, z).
+        Unit vectors (not renormalized; the basis is a polynomial in x, y, z): a length
+        further than :data:`UNIT_TOL` from 1 (a zero or NaN vector included) is an error.
     order : int
         n: bands 0 .. n-1, n^2 functions.
 
@@ -110,9 +136,10 @@ def sh_basis(directions, order: int = 4) -> np.ndarray:
     [0.282095, 0.0, 0.488603, 0.0]
     """
     order = _check_order(order)
-    d = np.asarray(directions, dtype=np.float64)
+    d = as_array(directions, "directions", finite=False)
     if d.shape[-1:] != (3,):
         raise ValueError(f"directions must have shape (..., 3), got {d.shape}")
+    _check_unit(d, "directions")
     x, y, z = d[..., 0], d[..., 1], d[..., 2]
     out = np.empty(d.shape[:-1] + (order * order,))
     # Re and Im of (x + i y)^m: sin^m(theta) cos(m phi), sin^m(theta) sin(m phi).
@@ -201,7 +228,8 @@ def rotate_zonal(zonal, direction) -> np.ndarray:
     zonal : (..., n) float
         Zonal coefficients :math:`z_l`.
     direction : (..., 3) float
-        Unit axis (broadcast against ``zonal``'s leading shape).
+        Unit axis (broadcast against ``zonal``'s leading shape); a zero, NaN or non-unit
+        axis is an error (as in :func:`sh_basis`).
 
     Returns
     -------
@@ -215,6 +243,9 @@ def rotate_zonal(zonal, direction) -> np.ndarray:
     """
     zonal = np.asarray(zonal, dtype=np.float64)
     n = zonal.shape[-1]
+    direction = as_array(direction, "direction", finite=False)
+    if direction.shape[-1:] == (3,):
+        _check_unit(direction, "direction")
     y = sh_basis(direction, order=n)
     ls = np.repeat(np.arange(n), 2 * np.arange(n) + 1)            # band of every index
     scale = np.sqrt(4.0 * np.pi / (2 * ls + 1))
@@ -409,7 +440,9 @@ def sh_log(g, *, epsilon: float = LOG_EPSILON) -> np.ndarray:
     Parameters
     ----------
     g : (..., n^2) float
-        SH vectors of positive-ish functions (visibilities).
+        SH vectors of positive-ish functions (visibilities). The domain: the largest
+        eigenvalue of each product matrix :math:`M_g` must be > 0 (g positive somewhere);
+        g = 0 or a function <= 0 everywhere is an error, not NaN.
     epsilon : float
         Relative eigenvalue floor, in (0, 1).
 
@@ -431,6 +464,11 @@ def sh_log(g, *, epsilon: float = LOG_EPSILON) -> np.ndarray:
     M = product_matrix(g)
 
     def fn(lam, R):
+        top = lam[..., -1]
+        if not np.all(top > 0):
+            raise ValueError(f"sh_log needs g positive somewhere: {int(np.count_nonzero(~(top > 0)))} vector(s) of g "
+                             f"have a product matrix whose largest eigenvalue is <= 0 (g = 0, or a function <= 0 "
+                             f"everywhere), and the log of such a function does not exist")
         floor = epsilon * lam[..., -1:]
         lam = np.maximum(lam, floor)
         return np.einsum("...ik,...k,...k->...i", R, np.log(lam), _SQRT_4PI * R[..., 0, :])
@@ -612,6 +650,13 @@ def sh_exp(f, *, method: str = "hybrid", terms: int = TAYLOR_TERMS, resolution: 
     -------
     (..., n^2) float64
 
+    Raises
+    ------
+    ValueError
+        When the result is not finite: the domain is the vectors whose exponential (and, for
+        ``"hybrid"`` and ``"taylor"``, the intermediate SH products) fit in float64, e.g. any
+        log-visibility (a function <= 0); a NaN result is never returned.
+
     Examples
     --------
     >>> g = np.zeros(16); g[0] = np.sqrt(4 * np.pi) * 0.8
@@ -622,15 +667,27 @@ def sh_exp(f, *, method: str = "hybrid", terms: int = TAYLOR_TERMS, resolution: 
     """
     f, n = _as_coeffs(f, "f")
     check_choice(method, "method", EXP_METHODS)
-    if method == "exact":
-        return _exact_exp(f, n)
-    if method == "ol":
-        return _exp_ol(f, n)
-    if method == "hybrid":
-        return _exp_hybrid(f, n)
     if method == "taylor":
-        return _exp_taylor(f, n, check_int(terms, "terms"))
-    # quadrature: project exp(f(omega)) point by point
-    flat = f.reshape(-1, n * n)
-    out = sh_project(lambda dirs: np.exp(sh_basis(dirs, n) @ flat.T), n, resolution=resolution)
-    return out.reshape(f.shape)
+        terms = check_int(terms, "terms")
+    with np.errstate(over="ignore", invalid="ignore"):
+        if method == "exact":
+            out = _exact_exp(f, n)
+        elif method == "ol":
+            out = _exp_ol(f, n)
+        elif method == "hybrid":
+            out = _exp_hybrid(f, n)
+        elif method == "taylor":
+            out = _exp_taylor(f, n, terms)
+        else:
+            # quadrature: project exp(f(omega)) point by point
+            flat = f.reshape(-1, n * n)
+            out = sh_project(lambda dirs: np.exp(sh_basis(dirs, n) @ flat.T), n, resolution=resolution)
+            out = out.reshape(f.shape)
+    if not np.all(np.isfinite(out)):
+        bad = ~np.all(np.isfinite(out), axis=-1)
+        worst = float(np.max(np.linalg.norm(f, axis=-1)[bad]))
+        raise ValueError(f"sh_exp({method!r}) overflows float64 for {int(np.count_nonzero(bad))} vector(s) of f "
+                         f"(largest ||f|| = {worst:.3g}): the exponential of a function reaching about 700 "
+                         f"exceeds 1.8e308, and the SH products of the scaling and squaring overflow sooner; "
+                         f"f must be a log-visibility (<= 0) or of moderate size")
+    return out

@@ -37,7 +37,7 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 from scipy.spatial import cKDTree
 
-from .._validate import as_array, as_points, as_rng, as_unit_vectors, check_choice, check_int
+from .._validate import as_array, as_points, as_rng, as_unit_vectors, check_bool, check_choice, check_int
 from ..estimate import DEFAULT_GROUPS, Estimate
 from ..raytrace import Tracer
 from ..sampling import shifted_hemisphere_directions, sobol_base
@@ -180,6 +180,7 @@ def sphere_set_ao(points, normals, centers, radii, *, order: int = 4, method: st
     check_choice(exp, "exp", sh.EXP_METHODS)
     check_choice(weighting, "weighting", ("cosine", "uniform"))
     chunk = check_int(chunk, "chunk")
+    clip = check_bool(clip, "clip")
     n2 = order * order
     kernel = _kernel_zonal(weighting, order)
     G = sh.triple_product_tensor(order) if method == "product" else None
@@ -460,7 +461,10 @@ def sphere_set(scene, k: int, *, seed=0, meshes=None, samples: int = 20000) -> S
     """
     scene = as_scene(scene)
     k = check_int(k, "k")
-    samples = check_int(samples, "samples", minimum=k)
+    samples = check_int(samples, "samples")
+    if k > samples:
+        raise ValueError(f"k = {k} spheres need at least k interior points to cluster, but samples = {samples}; "
+                         f"pass a smaller k or samples >= k")
     rng = as_rng(seed)
     triangles, face_normals, chosen = _selected(scene, meshes)
     tracer = Tracer(triangles, face_normals=face_normals, threads=1)

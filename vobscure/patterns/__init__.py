@@ -26,6 +26,11 @@ Generators (``method=``), for the disk (:func:`disk`) and the ball (:func:`ball`
 ``"spiral"``
     A sunflower (Vogel) spiral on the disk; spherical-Fibonacci shells in the ball.
     Deterministic: ``seed`` is accepted and unused.
+``"quick"``
+    For counts no table holds (:mod:`~vobscure.patterns.quick`): the spiral, refined by one
+    electrostatic relaxation with a bounded step budget (disk n <= 128, ball n <= 512), else
+    returned as it is with the weights of its equal-measure bands; about a second at most.
+    Deterministic.
 
 Every method has a point-symmetric variant (``symmetric=True``, the default): antipodal pairs,
 plus the centre for odd n. The screen-space estimators rely on it: a point-symmetric pattern is
@@ -33,7 +38,10 @@ exact on a plane through the ball's centre. ``center=True`` forces a sample at t
 
 The default, ``method="best"``, is the best measured pattern: per count and variant, the table
 entry with the lowest recorded quality (Lloyd or electrostatic at every count of the disk
-tables; see ``docs/patterns_results.md``).
+tables; see ``docs/patterns_results.md``), and ``"quick"`` where no table holds the count.
+
+Limits: n <= :data:`SAMPLES_LIMIT` (65536) for every method; n <= 257 for the generators whose
+cost grows as n^2 or faster (electrostatic, Lloyd, Poisson). Beyond them ValueError.
 
 :func:`quality` measures any pattern with one metric (the RMS error of its VO estimate over
 random planes and creases whose exact VO is known in closed form), and the defaults load from
@@ -43,7 +51,8 @@ them).
 Modules: :mod:`~vobscure.patterns.constructors` (:func:`disk`, :func:`ball`,
 :func:`best_method`), :mod:`~vobscure.patterns.generators` (the generators and
 :func:`~vobscure.patterns.generators.generate`), :mod:`~vobscure.patterns.electrostatic`
-(the paper's generator), :mod:`~vobscure.patterns.metric` (:func:`quality` and the closed-form
+(the paper's generator), :mod:`~vobscure.patterns.quick` (untabulated counts and the limits),
+:mod:`~vobscure.patterns.metric` (:func:`quality` and the closed-form
 volumes), :mod:`~vobscure.patterns.precomputed` (the tables: :func:`load_table`,
 :func:`build_tables`); the pattern type and the discrete Voronoi diagram in ``_pattern``, what
 the generators share in ``_layout``; the command line in ``__main__``.
@@ -66,6 +75,7 @@ from .electrostatic import ELECTROSTATIC
 from .generators import GENERATOR_VERSION, LLOYD, METHODS, generate
 from .metric import (FAMILIES, QUALITY_NOTES, QUALITY_SEED, QUALITY_TRIALS, QUALITY_VERSION, cap_volume,
                      crease_volume, quality, squared_errors)
+from .quick import PAIR_BUDGET, QUICK, REFINE_MAX, REFINE_STEPS, SAMPLES_LIMIT, SLOW_LIMIT, SLOW_METHODS
 from .precomputed import (TABLE_DIR, TABLE_EXTRA_N, TABLE_N, VARIANTS, build_tables, load_table, rescore_tables,
                           variant_flags)
 
@@ -83,4 +93,6 @@ __all__ = [
     "build_tables",
     "METHODS",
     "TABLE_DIR",
+    "QUICK",
+    "SAMPLES_LIMIT",
 ]

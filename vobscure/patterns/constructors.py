@@ -15,14 +15,16 @@ from ._pattern import SamplePattern, int_seed
 from . import generators
 from .generators import METHODS
 from .precomputed import DIM, recorded_qualities, table_or_generated
+from .quick import QUICK, check_count, quick_pattern
 
 __all__ = ["disk", "ball", "best_method", "BEST", "BEST_FALLBACK"]
 
 #: The default ``method`` of :func:`disk` and :func:`ball`: per count and variant, the table
 #: entry with the lowest recorded quality (see :func:`best_method`).
 BEST = "best"
-#: What ``method="best"`` uses when no table holds the count: the paper's generator.
-BEST_FALLBACK = "electrostatic"
+#: What ``method="best"`` uses when no table holds the count: the quick generator (a spiral
+#: with a bounded electrostatic refinement, :mod:`vobscure.patterns.quick`).
+BEST_FALLBACK = QUICK
 
 
 def _check_bool(value, name: str) -> bool:
@@ -52,7 +54,8 @@ def make_pattern(dim: int, n, method, center, symmetric, seed) -> SamplePattern:
     (5, 2)
     """
     n = check_int(n, "n")
-    check_choice(method, "method", (BEST,) + METHODS)
+    check_choice(method, "method", (BEST,) + METHODS + (QUICK,))
+    check_count(n, method)
     symmetric = _check_bool(symmetric, "symmetric")
     center = _resolve_center(n, center, symmetric)
     selection = None
@@ -61,7 +64,11 @@ def make_pattern(dim: int, n, method, center, symmetric, seed) -> SamplePattern:
         selection = {"rule": "lowest recorded quality among the tables holding n" if scores
                      else f"no table holds n: {BEST_FALLBACK}", "candidates": dict(scores)}
     key = int_seed(seed)
-    if key is None:
+    if method == QUICK:
+        if key is None:
+            as_rng(seed)                              # validated; the quick pattern does not use it
+        p = quick_pattern(dim, n, symmetric, center)
+    elif key is None:
         p = generators.generate(dim, n, method, symmetric, center, as_rng(seed))
     else:
         p = table_or_generated(dim, n, method, symmetric, center, key)
@@ -77,12 +84,25 @@ def disk(n: int, *, method: str = BEST, center: bool | None = None, symmetric: b
     Parameters
     ----------
     n : int
-        Number of samples, >= 1.
+        Number of samples, 1 <= n <= 65536 (:data:`~vobscure.patterns.SAMPLES_LIMIT`; larger
+        counts raise ValueError: for converged values use ``vobscure.vo_reference``).
     method : str, optional
-        One of :data:`METHODS`, or ``"best"`` (default): the generator whose table entry for
-        this count and variant has the lowest recorded :func:`quality`
-        (:func:`best_method`; the electrostatic generator of Loos & Sloan 2010, Sec. 4.5,
-        where no table holds the count). ``pattern.method`` names the generator used.
+        One of :data:`METHODS`, ``"quick"``, or ``"best"`` (default): the generator whose
+        table entry for this count and variant has the lowest recorded :func:`quality`
+        (:func:`best_method`), and ``"quick"`` where no table holds the count (disk n <= 33
+        and 64, 65, 128, 129, 256, 257 are tabulated; ball n <= 40 and the same six).
+        ``pattern.method`` names the generator used.
+
+        ``"quick"`` (:mod:`vobscure.patterns.quick`) takes about a second at most: the
+        sunflower spiral (spherical-Fibonacci shells in the ball), refined by one
+        electrostatic relaxation (Loos & Sloan 2010, Sec. 4.5) with a budget of at most 300
+        steps and 3e6 pair interactions, for n <= 128 on the disk and n <= 512 in the ball;
+        above that, or when the budget allows fewer than 20 steps, the spiral is returned as
+        it is, with the weights of its equal-measure bands. It is deterministic (``seed`` is
+        validated and unused); ``provenance["refinement"]`` records the budget and the steps
+        taken. The named generators ``"electrostatic"``, ``"lloyd"`` and ``"poisson"`` cost
+        O(n^2) or more (seconds at n = 9, minutes at n = 257) and raise ValueError above
+        n = 257; the others are fast at every count.
     center : bool or None, optional
         True forces a sample at the origin, False forbids forcing one (a generator may still
         put a point near it). None: the centre exactly when the pattern is symmetric and n is
@@ -101,6 +121,12 @@ def disk(n: int, *, method: str = BEST, center: bool | None = None, symmetric: b
         ``points`` (n, 2) (the centre first when present; symmetric: each free point followed
         by its antipode), ``weights`` (n,) summing to 1, ``method`` and ``provenance``.
 
+    Raises
+    ------
+    ValueError
+        Naming the argument: a bad ``n``, ``method``, ``center``, ``symmetric`` or ``seed``;
+        n > 65536; n > 257 with ``"electrostatic"``, ``"lloyd"`` or ``"poisson"``.
+
     References
     ----------
     Loos & Sloan 2010, Sec. 4.5 (generation, the discrete 512^2 Voronoi diagram) and footnote 5
@@ -113,6 +139,9 @@ def disk(n: int, *, method: str = BEST, center: bool | None = None, symmetric: b
     ((9, 2), True, True, 1.0)
     >>> disk(6, method="sobol", symmetric=False, center=True, seed=1).has_center
     True
+    >>> q = disk(1000)                   # no table holds it: the spiral, unrefined
+    >>> q.method, q.provenance["refinement"]["skipped"]
+    ('quick', True)
     """
     return make_pattern(2, n, method, center, symmetric, seed)
 
@@ -121,8 +150,11 @@ def ball(n: int, *, method: str = BEST, center: bool | None = None, symmetric: b
          seed=0) -> SamplePattern:
     """A pattern of ``n`` points in the unit ball with volume weights, for point sampling.
 
-    Parameters are those of :func:`disk`; the weights are the volumes of the discrete
-    Voronoi regions (128^3 grid, Loos & Sloan 2010, Sec. 4.5). A point sample at the centre
+    Parameters are those of :func:`disk` (the same limits: n <= 65536, the slow generators
+    n <= 257, ``"quick"`` and the default about a second at any untabulated count); the
+    weights are the volumes of the discrete Voronoi regions (128^3 grid, Loos & Sloan 2010,
+    Sec. 4.5), or 1/n for an unrefined quick pattern (its points split the ball into
+    equal-volume shares). A point sample at the centre
     lies on any surface through it and reads open (occupied means behind the surface), so
     for point sampling the even counts, without the centre, are the better symmetric ones.
 
@@ -130,6 +162,11 @@ def ball(n: int, *, method: str = BEST, center: bool | None = None, symmetric: b
     -------
     SamplePattern
         ``points`` (n, 3), ``weights`` (n,) summing to 1.
+
+    Raises
+    ------
+    ValueError
+        As :func:`disk`.
 
     Examples
     --------
@@ -166,15 +203,15 @@ def best_method(domain: str, n: int, *, center: bool | None = None, symmetric: b
     str
         Among the tables in :data:`TABLE_DIR` that hold this count and variant, the method
         whose recorded :func:`quality` is the lowest (ties: the earlier in :data:`METHODS`);
-        ``"electrostatic"`` when none does. The choice is made on the tables' seed-0
+        ``"quick"`` when none does (:mod:`vobscure.patterns.quick`). The choice is made on the tables' seed-0
         patterns; another seed runs the chosen generator with that seed.
 
     Examples
     --------
     >>> best_method("disk", 9) in METHODS
     True
-    >>> best_method("disk", 1000)      # no table holds it
-    'electrostatic'
+    >>> best_method("disk", 1000)      # no table holds it: the quick generator
+    'quick'
     """
     check_choice(domain, "domain", ("disk", "ball"))
     n = check_int(n, "n")

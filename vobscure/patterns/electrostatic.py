@@ -21,7 +21,7 @@ import numpy as np
 from ._layout import R_MAX, Layout, clip_to_domain, dart_throw, optimization_grid
 from ._pattern import equal_integral_error, voronoi_regions, weighted_cells
 
-__all__ = ["electrostatic", "ELECTROSTATIC"]
+__all__ = ["electrostatic", "relax", "ELECTROSTATIC", "PAIR_CHUNK"]
 
 #: Parameters of the electrostatic generator (see :func:`electrostatic` and docs/patterns.md).
 ELECTROSTATIC = {
@@ -36,6 +36,10 @@ ELECTROSTATIC = {
     "min_step": 1e-3,      # a step below this fraction of the spacing: the start is at rest
     "error": "energy",     # what a step must decrease: "energy" or "voronoi"
 }
+
+#: Pairs per block of the repulsion (a block of rows of the (free, n) distance matrix): memory
+#: O(n * block) instead of O(n^2). The tables' counts (n <= 257) fit in one block.
+PAIR_CHUNK = 1 << 16
 
 _BOUNDARY_R = np.linspace(0.0, R_MAX, 4001)
 
@@ -87,15 +91,24 @@ def _repulsion(layout: Layout, free: np.ndarray) -> tuple[np.ndarray, float]:
     sum_{pairs} 1 / (3 d^3) of the whole set.
 
     The energy comes from the free points' rows alone: the antipodes' rows repeat them and the
-    centre's row holds the free points' distances to the origin.
+    centre's row holds the free points' distances to the origin. The rows are taken in blocks
+    of at most :data:`PAIR_CHUNK` pairs, so that memory stays O(n * block) (one block for every
+    count the tables hold, where the sums are those of one array).
     """
     full = layout.full(free)
-    diff = free[:, None, :] - full[None, :, :]
-    d2 = np.sum(diff * diff, axis=2)
-    d2[np.arange(layout.free), layout.self_index()] = np.inf
-    d2 = np.maximum(d2, 1e-24)
-    force = np.sum(diff * (d2 ** -2.5)[:, :, None], axis=1)    # |F| = 1 / d^4, away from x_j
-    rows = float(np.sum(d2 ** -1.5)) / 3.0
+    rows_per_block = max(1, PAIR_CHUNK // len(full))
+    force = np.empty_like(free)
+    own = layout.self_index()
+    rows = 0.0
+    for a in range(0, layout.free, rows_per_block):
+        b = min(layout.free, a + rows_per_block)
+        diff = free[a:b, None, :] - full[None, :, :]
+        d2 = np.sum(diff * diff, axis=2)
+        d2[np.arange(b - a), own[a:b]] = np.inf
+        d2 = np.maximum(d2, 1e-24)
+        force[a:b] = np.sum(diff * (d2 ** -2.5)[:, :, None], axis=1)    # |F| = 1 / d^4, away from x_j
+        rows += float(np.sum(d2 ** -1.5))
+    rows /= 3.0
     if layout.center:
         rows += float(np.sum(np.maximum(np.sum(free * free, axis=1), 1e-24) ** -1.5)) / 3.0
     return force, 0.5 * (1 + int(layout.symmetric)) * rows
@@ -233,3 +246,41 @@ def electrostatic(layout: Layout, rng: np.random.Generator, params: dict) -> np.
         if score < best_score:
             best, best_score = run, score
     return best.free
+
+
+def relax(layout: Layout, start: np.ndarray, steps: int, params: dict | None = None) -> tuple[np.ndarray, int]:
+    """One electrostatic relaxation (Loos & Sloan 2010, Sec. 4.5) from ``start``, at most ``steps`` steps.
+
+    The loop of :func:`electrostatic` for a single given start and a hard step budget: what
+    the quick patterns (:mod:`vobscure.patterns.quick`) refine their spiral with.
+
+    Parameters
+    ----------
+    layout : Layout
+    start : (layout.free, dim) float
+        The free points to start from.
+    steps : int
+        Step budget (>= 0); each step costs one evaluation of the (free, n) repulsion.
+    params : dict, optional
+        Default :data:`ELECTROSTATIC` (its ``starts`` and ``steps`` are not used).
+
+    Returns
+    -------
+    free : (layout.free, dim) float64
+    steps_done : int
+        Steps taken (<= ``steps``): fewer when the start came to rest first.
+
+    Examples
+    --------
+    >>> from vobscure.patterns._layout import Layout
+    >>> lay = Layout(2, 6, True, False)
+    >>> free, done = relax(lay, np.array([[0.5, 0.1], [0.1, 0.6], [-0.4, 0.3]]), 20)
+    >>> free.shape, done <= 20
+    ((3, 2), True)
+    """
+    p = ELECTROSTATIC if params is None else params
+    if layout.free == 0 or steps <= 0:
+        return np.asarray(start, dtype=np.float64), 0
+    cells, mass = weighted_cells(layout.dim, optimization_grid(layout.dim, layout.n))
+    run = _Relaxation(layout, clip_to_domain(np.asarray(start, dtype=np.float64)), p, cells, mass).run(steps)
+    return run.free, run.steps_done

@@ -7,7 +7,7 @@
 - :func:`disk_pixels` / :func:`nearest_taps`: disk offsets to pixels (and the nearest taps).
 - :func:`fetch_depth`: the depth-buffer fetch (nearest or bilinear) with the off-screen policy.
 - :func:`noise_texture` / :func:`noise_at`: the small tiled random texture that randomizes
-  patterns per pixel.
+  patterns per pixel, frame by frame (the schedules: :mod:`vobscure.screenspace.noise`).
 - :func:`warper`: view depth to the estimator's line coordinate (see ``docs/screenspace.md``).
 - :func:`tangent_plane_line`: the tangent plane's line coordinate (Loos & Sloan 2010, Sec. 4.4).
 - :func:`solid_intervals` / :func:`nearest_pixel` / :func:`inside_intervals` /
@@ -41,17 +41,16 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from .._validate import as_rng, check_choice, check_int, check_positive
+from .._validate import check_bool, check_choice, check_int, check_positive
 from ..camera.kernel import ray_to_xy, ray_xy
 from ..estimate import Estimate
 from ..gbuffer import GBuffer
 from ..patterns import SamplePattern, ball, disk
+from .noise import NOISE_SIZE, check_frame, check_schedule, schedule_texture
 
 FETCHES = ("nearest", "bilinear")
 OFFSCREEN = ("clamp", "open")
 FALLOFFS = ("constant", "quadratic")
-#: Default edge of the tiled random texture (pixels).
-NOISE_SIZE = 4
 
 
 @dataclass
@@ -246,6 +245,11 @@ def as_pattern(samples, dim: int, name: str = "samples") -> SamplePattern:
             raise ValueError(f"{name} must be a {kind} pattern, got points of shape {samples.points.shape}")
         return samples
     n = check_int(samples, name)
+    from ..patterns import SAMPLES_LIMIT
+
+    if n > SAMPLES_LIMIT:
+        raise ValueError(f"{name} must be at most {SAMPLES_LIMIT} points per pixel, got {n}; for converged values "
+                         "use vo_reference (line integrals, not a pattern)")
     return _default_pattern(n, dim)
 
 
@@ -277,12 +281,18 @@ def check_common(*, fetch="nearest", offscreen="clamp", falloff="constant", thic
     return thickness
 
 
-def noise_texture(noise_size: int, seed, dim: int, randomize: bool) -> np.ndarray | None:
-    """The (noise_size, noise_size, dim) tile of random unit vectors, or None (no randomization)."""
+def noise_texture(noise_size: int, seed, dim: int, randomize: bool, *, frame: int = 0,
+                  schedule: str = "white") -> np.ndarray | None:
+    """The tile of unit vectors (T, T, dim) of frame ``frame`` of a noise schedule
+    (:func:`vobscure.screenspace.noise.schedule_texture`; T = noise_size for ``"white"`` and
+    ``"rotate"``, 64 for ``"r2"`` and ``"gtao"``), or None without randomization. ``frame``
+    and ``schedule`` are checked either way; frame 0 of ``"white"`` is the single-frame
+    texture: ``as_rng(seed).normal(size=(T, T, dim))`` normalized."""
+    schedule, frame = check_schedule(schedule), check_frame(frame)
+    randomize = check_bool(randomize, "randomize")
     if not randomize:
         return None
-    v = as_rng(seed).normal(size=(noise_size, noise_size, dim))
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return schedule_texture(schedule, frame, seed=seed, noise_size=noise_size, dim=dim)
 
 
 def noise_at(px: Pixels, texture: np.ndarray | None) -> np.ndarray | None:
@@ -431,18 +441,43 @@ def nearest_taps(px: Pixels, dj: np.ndarray, e: np.ndarray, *, offscreen: str, p
     return out
 
 
-def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None, *, chunk: int = None):
-    """Chunks of valid pixels that share one texel of the tiled noise texture.
+#: The most texels a noise texture may have for :func:`noise_classes` to group the pixels by
+#: texel. A group costs a fixed overhead (a pass over the image's rows and columns of its
+#: texel, a :func:`prepare`, a loop over the pattern), worth paying when groups are large: the
+#: default 4 x 4 tile of the ``"white"`` and ``"rotate"`` schedules (and tiles up to 8 x 8)
+#: are grouped; the 64 x 64 tiles of ``"r2"`` and ``"gtao"`` (4096 texels) are not, their
+#: pixels read their texel one by one (:func:`per_pixel_noise`).
+MAX_NOISE_CLASSES = 64
 
-    Yields ``(index, v)``: flat pixel indices and the texel's unit vector (None without
-    randomization, then the chunks are plain runs of valid pixels). Within a chunk every
-    pixel turns the pattern the same way, so the rotated pattern points are scalars and
-    only the per-pixel radius varies: the line estimator's inner loop then does no
-    per-pixel reflection at all.
+
+def per_pixel_noise(texture: np.ndarray | None) -> bool:
+    """True when :func:`noise_classes` yields per-pixel texels for ``texture``: it has more
+    than :data:`MAX_NOISE_CLASSES` texels (read at call time)."""
+    return texture is not None and texture.shape[0] * texture.shape[1] > MAX_NOISE_CLASSES
+
+
+def noise_classes(depth64: np.ndarray, shape: tuple, texture: np.ndarray | None, *, chunk: int = None):
+    """Chunks of valid pixels with their texels of the tiled noise texture.
+
+    Yields ``(index, v)``: flat pixel indices and their texel. For a texture of at most
+    :data:`MAX_NOISE_CLASSES` texels a chunk's pixels share one texel and ``v`` is its unit
+    vector (dim,): every pixel turns the pattern the same way, so the rotated pattern points
+    are scalars and only the per-pixel radius varies (the line estimator's inner loop then
+    does no per-pixel reflection at all). For a larger texture (:func:`per_pixel_noise`) the
+    chunks are plain runs of valid pixels and ``v`` is (k, dim), each pixel's own texel
+    (:func:`noise_at`): grouping by texel would cost a group per texel. Without
+    randomization ``v`` is None and the chunks are plain runs of valid pixels.
     """
     chunk = CHUNK_PIXELS if chunk is None else chunk
     H, W = shape
     valid = (np.isfinite(depth64) & (depth64 > 0)).reshape(H, W)
+    if per_pixel_noise(texture):
+        size = texture.shape[0]
+        index = np.flatnonzero(valid)
+        for c in range(0, len(index), chunk):
+            i, j = np.divmod(index[c:c + chunk], W)
+            yield index[c:c + chunk], texture[i % size, j % size]
+        return
     if texture is None:
         index = np.flatnonzero(valid)
         for c in range(0, len(index), chunk):

@@ -303,7 +303,8 @@ def region_areas(pattern: SamplePattern) -> np.ndarray:
 def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", model: str = "box", fetch: str = "bspline",
             prefilter: bool = False, lod_bias=None, randomize: bool = True, seed=0,
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, reconstruction=None) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, reconstruction=None, frame: int = 0,
+            schedule: str = "white") -> np.ndarray:
     """Volumetric Obscurance by area sampling (Loos & Sloan 2010, Sec. 4.2).
 
     Each disk sample (x, y) of the pattern stands for its Voronoi region of the unit disk,
@@ -329,7 +330,10 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
         ``vobscure.patterns.disk(n)``, or a :class:`~vobscure.patterns.SamplePattern` with
         (n, 2) ``points`` in the unit disk and (n,) footnote-5 ``weights``. Default 1: the
         centre alone, i.e. the whole disk as one area sample, the paper's single-sample
-        method.
+        method. Counts n <= 33, 64, 65, 128, 129, 256 and 257 load from the precomputed
+        tables; any other count is built by the quick generator
+        (:mod:`vobscure.patterns.quick`: about a second at most, once per process). n > 65536
+        raises ValueError.
     normal_clamp : bool, optional
         Clip every chord at the tangent plane (Sec. 4.4); the depth distribution is then
         that of the surface relative to the tangent plane (see Notes). A flat surface reads
@@ -373,6 +377,9 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     noise_size : int, optional
         Edge of the tiled random texture in pixels, as for :func:`vobscure.vo_point`
         (default 4). Unused without ``randomize``.
+    frame, schedule : int, str, optional
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
     reconstruction : {"bspline", "trilinear"}, optional
         Deprecated name of ``fetch`` (a DeprecationWarning); given, it replaces ``fetch``.
 
@@ -471,6 +478,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     gb, depth64, index = C.frame(gbuffer, radius)
     radius = float(radius)
     pattern = C.as_pattern(samples, 2)
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     check_choice(model, "model", MODELS)
     if reconstruction is not None:
         warnings.warn("vo_area(reconstruction=...) is deprecated: use fetch=, the name of the depth fetch of "
@@ -479,6 +487,7 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     reconstruction = check_choice(fetch, "fetch", RECONSTRUCTIONS)
     lod_bias = LOD_BIAS[reconstruction] if lod_bias is None else float(as_array(lod_bias, "lod_bias", shape=()))
     thickness = C.check_common(offscreen=offscreen, falloff=falloff, thickness=thickness, noise_size=noise_size)
+    texture = C.noise_texture(noise_size, seed, 2, randomize, frame=frame, schedule=schedule)
     dtype = C.out_dtype(gbuffer)
     H, W = gb.depth.shape
     if len(index) == 0:
@@ -488,10 +497,9 @@ def vo_area(gbuffer, *, radius: float, samples=1, normal_clamp: bool = False, th
     depth2 = depth64.reshape(H, W)
     finite = np.isfinite(depth2) & (depth2 > 0)
     pyramid = MomentPyramid.from_depth(depth2, finite, perspective=gb.camera.is_perspective, offscreen=offscreen,
-                                  prefilter=bool(prefilter), positions=normal_clamp)
+                                  prefilter=C.check_bool(prefilter, "prefilter"), positions=normal_clamp)
     # Step 2 (per sample): the regions' log2 areas are constants (Sec. 4.2)
     half_log_area = 0.5 * np.log2(region_areas(pattern))
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
     kernel = partial(_area_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
                      thickness=thickness, falloff=falloff, model=model, reconstruction=reconstruction,
                      lod_bias=lod_bias, offscreen=offscreen, pyramid=pyramid, half_log_area=half_log_area,

@@ -48,7 +48,8 @@ def _inner_integral(h, gamma, sin_g, cos_g):
 def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_range: float = 0.0,
          thin_occluder: float = 0.0, thickness=None, power: float = 1.0, normal_fudge: float = 0.0,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
+         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
+         schedule: str = "white", clip: bool = True) -> np.ndarray:
     """Cosine-weighted ambient occlusion within ``radius`` by horizon search (GTAO).
 
     For each pixel (view-space point p, normal n, view vector v from p to the camera),
@@ -98,6 +99,14 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     normal_fudge : float, optional
         XeGTAO's "slight overdarkening on high slopes" fudge, in [0, 1] (default 0): the
         projected normal's length l becomes l + normal_fudge (1 - l). XeGTAO ships 0.05.
+    clip : bool, optional
+        Clip the visibility to [0, 1] (default True). With few slices the estimate of one
+        pixel can exceed 1 (a slice's weight is its projected normal's length, exact only on
+        average over the slice angle); clipped frames then average to a darker image. False
+        keeps the unclipped value, whose mean over random slice angles is the integral: what
+        a sequence accumulates (XeGTAO likewise keeps its raw term unclipped, "can overshoot
+        1 but will later average out to 1", ``XE_GTAO_OCCLUSION_TERM_SCALE`` in
+        ``XeGTAO.h``). ``power`` is applied after the clip, and only to values >= 0.
     randomize : bool, optional
         Rotate the slices and jitter the steps per pixel from a tiled noise texture
         (default True). False: u = 1/2 for both (a midpoint rule; ``seed`` unused).
@@ -123,6 +132,10 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
         that a pixel's slices sample different radii. Both unbiased; without a denoiser
         ``"r1"`` measured slightly worse per frame (docs/screenspace.md, "GTAO"). Unused with
         ``randomize=False``.
+    frame, schedule : int, str, optional
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; ``"r2"`` is XeGTAO's own noise (u1 the slice rotation, u2
+        the step jitter). Unused without ``randomize``.
 
     Returns
     -------
@@ -216,8 +229,8 @@ def gtao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, falloff_ran
     options["intervals"] = _layers(gbuffer, thickness)
     # a 3-D unit vector per texel: the azimuth of its (x, y) and its z are independent and
     # uniform (Archimedes), giving the slice rotation and the step jitter
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
-    kernel = partial(_gtao_kernel, radius=radius, texture=texture, **options)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
+    kernel = partial(_gtao_kernel, radius=radius, texture=texture, clip=C.check_bool(clip, "clip"), **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer))
 
 
@@ -226,7 +239,8 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
                       falloff_range: float = 0.0, thin_occluder: float = 0.0, thickness=None,
                       normal_fudge: float = 0.0,
                       randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-                      noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
+                      noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
+                      schedule: str = "white") -> np.ndarray:
     """View-space bent normals from the GTAO horizons (Jimenez et al. 2016).
 
     The same horizon search as :func:`gtao` (same arguments and defaults, same seed -> same
@@ -237,7 +251,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
 
     Parameters
     ----------
-    gbuffer, radius, slices, steps, falloff_range, thin_occluder, thickness, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter
+    gbuffer, radius, slices, steps, falloff_range, thin_occluder, thickness, normal_fudge, randomize, seed, fetch, offscreen, noise_size, step_jitter, frame, schedule
         As in :func:`gtao` (``power`` does not apply to a direction).
 
     Returns
@@ -267,7 +281,7 @@ def gtao_bent_normals(gbuffer, *, radius: float, slices: int = 3, steps: int = 3
                      power=1.0, normal_fudge=normal_fudge, randomize=randomize, fetch=fetch,
                      offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
     options["intervals"] = _layers(gbuffer, thickness)
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     gb, depth64, index = C.frame(gbuffer, radius)
     H, W = gb.depth.shape
     out = np.full((H * W, 3), np.nan, dtype=C.out_dtype(gbuffer))
@@ -288,8 +302,7 @@ def _check(*, slices, steps, falloff_range, thin_occluder, power, normal_fudge, 
                    thin_occluder=C.check_positive(thin_occluder, "thin_occluder", allow_zero=True),
                    power=C.check_positive(power, "power"),
                    normal_fudge=_fraction(normal_fudge, "normal_fudge"), fetch=fetch, offscreen=offscreen)
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise ValueError(f"randomize must be True or False, got {randomize!r}")
+    C.check_bool(randomize, "randomize")
     if step_jitter not in STEP_JITTERS:
         raise ValueError(f"step_jitter must be one of {', '.join(STEP_JITTERS)}, got {step_jitter!r}")
     options["r1_jitter"] = step_jitter == "r1"
@@ -315,7 +328,7 @@ def _fraction(value, name):
 
 
 def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, power, normal_fudge, fetch,
-                 offscreen, texture, r1_jitter=False, bent=False, intervals=None):
+                 offscreen, texture, r1_jitter=False, bent=False, intervals=None, clip=True):
     """GTAO of one chunk of pixels (see :func:`gtao`): loops over slices and steps only.
 
     Returns the (k,) visibility, or with ``bent`` the (k, 3) unnormalized bent normal. With
@@ -390,9 +403,10 @@ def _gtao_kernel(px, *, radius, slices, steps, falloff_range, thin_occluder, pow
     if bent:
         return bent_normal
     visibility /= slices
-    np.clip(visibility, 0.0, 1.0, out=visibility)
+    if clip:
+        np.clip(visibility, 0.0, 1.0, out=visibility)
     if power != 1.0:
-        visibility **= power
+        np.power(visibility, power, out=visibility, where=visibility >= 0)
     return visibility
 
 

@@ -145,7 +145,8 @@ def _intervals_line_integral(lo, hi, occupied, z_s, falloff):
 @C.inner_frame
 def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, thickness=None,
             falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "nearest",
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+            schedule: str = "white") -> np.ndarray:
     """Volumetric Obscurance by line sampling (Loos & Sloan 2010, Sec. 4.1).
 
     For each disk sample (x, y) of the pattern, the chord [-z_s, z_s] of the unit sphere
@@ -166,7 +167,12 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
         ``vobscure.patterns.disk(n)`` (default 9: the larger line configuration of Loos &
         Sloan 2010, Table 1), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 2) ``points`` in the unit disk and
-        (n,) footnote-5 ``weights``.
+        (n,) footnote-5 ``weights``. Counts n <= 33, 64, 65, 128, 129, 256 and 257 load from
+        the precomputed tables; any other count is built by the quick generator
+        (:mod:`vobscure.patterns.quick`: about a second at most, once per process): the
+        sunflower spiral refined by a bounded electrostatic relaxation for n <= 128, the
+        spiral as it is above. n > 65536 raises ValueError (for converged values use
+        :func:`vobscure.vo_reference`).
     normal_clamp : bool, optional
         Restrict the ball to the half-ball on the normal's side (Sec. 4.4): every chord is
         clipped at the tangent plane. A flat open surface then reads 1.0 instead of 0.5.
@@ -205,6 +211,9 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     noise_size : int, optional
         Edge of the tiled random texture in pixels, as for :func:`vobscure.vo_point`
         (default 4). Unused without ``randomize``.
+    frame, schedule : int, str, optional
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
 
     Returns
     -------
@@ -275,10 +284,11 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     pattern = C.as_pattern(samples, 2)
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     intervals = C.solid_intervals(gbuffer, thickness)
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff,
                                thickness=None if intervals is not None else thickness, noise_size=noise_size)
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    texture = C.noise_texture(noise_size, seed, 2, randomize, frame=frame, schedule=schedule)
     prepared = C.frame(gbuffer, radius)
     gb, depth64, index = prepared
     options = dict(radius=radius, normal_clamp=normal_clamp, thickness=thickness, falloff=falloff,
@@ -302,6 +312,11 @@ def vo_line(gbuffer, *, radius: float, samples=9, normal_clamp: bool = False, th
     antipodal = _exactly_antipodal(pattern)
     for chunk, v in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
+        if v is not None and v.ndim == 2:
+            # a large tile: a texel per pixel, the reflection done per pixel in the kernel
+            out[chunk] = _line_nearest(px, points=pattern.points, weights=pattern.weights, padded=padded,
+                                       antipodal=antipodal, turn=v, **options)
+            continue
         # Sec. 4.5: reflection about a random 2-D direction per pixel, 2 (s . v) v - s; one
         # texel of the tiled texture per chunk, so the reflected points are the same for
         # every pixel of the chunk
@@ -328,8 +343,15 @@ def _exactly_antipodal(pattern) -> bool:
 
 
 def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, falloff, offscreen, padded,
-                  antipodal=False, intervals=None):
+                  antipodal=False, intervals=None, turn=None):
     """Line-sampled VO of pixels that share one rotated pattern, nearest fetch (see :func:`vo_line`).
+
+    With ``turn`` (k, 2), unit vectors, one per pixel, each pixel reflects ``points`` about
+    the line along its own vector (Sec. 4.5), here in the tap offsets: the reflection
+    2 (s . v) v - s is the matrix [[c, s], [s, -c]] with c = 2 v_x^2 - 1 and s = 2 v_x v_y
+    (cosine and sine of twice v's angle), folded with the projected radius once per chunk. It
+    keeps a point's length, so the chord z_s (and whether a point is on the rim) is the
+    pattern point's, a scalar as for shared points.
 
     Each line keeps its exact disk offset (x, y), hence a scalar z_s per sample, and reads
     the depth of the pixel its disk point falls in (the same occupancy test as
@@ -380,6 +402,14 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
             def warp(depth):
                 return (depth - z) * inv_radius
     raw = np.empty(k) if thickness is not None else None
+    if turn is not None:
+        # Sec. 4.5, the per-pixel reflection times the projected radius: the tap offsets
+        # (dj, e) = (R_x x', R_y y') of the reflected point (x', y') = (c x + s y, s x - c y)
+        v_x, v_y = turn[:, 0], turn[:, 1]
+        c2 = 2.0 * v_x * v_x - 1.0          # cos and sin of twice the angle of v
+        s2 = 2.0 * v_x * v_y
+        j_x, j_y = r_x * c2, r_x * s2        # dj = j_x x + j_y y
+        e_x, e_y = r_y * s2, -r_y * c2       # e = e_x x + e_y y
     const = 0.0     # the scalar parts of num and den
     wsum = 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -390,9 +420,17 @@ def _line_nearest(px, *, points, weights, radius, normal_clamp, thickness, fallo
                 continue        # a point on the rim has no chord
             z_s = float(np.sqrt(z_s2))
             # the pixel the disk point p + R (x, y, 0) falls in
-            np.multiply(r_x, x, out=dj)
+            if turn is None:
+                np.multiply(r_x, x, out=dj)
+                np.multiply(r_y, y, out=e)
+            else:
+                np.multiply(j_x, x, out=dj)
+                np.multiply(j_y, y, out=t)     # t: scratch until the tap is read
+                dj += t
+                np.multiply(e_x, x, out=e)
+                np.multiply(e_y, y, out=t)
+                e += t
             np.rint(dj, out=dj)
-            np.multiply(r_y, y, out=e)
             np.rint(e, out=e)
             if intervals is not None:
                 # the tapped pixel, whose intervals are read below (none: empty space)

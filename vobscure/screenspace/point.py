@@ -24,14 +24,14 @@ __all__ = ["vo_point", "vo_reference", "point_taps"]
 
 
 def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thickness, falloff,
-              randomize, seed, fetch, offscreen, noise_size, intervals=None):
+              randomize, seed, fetch, offscreen, noise_size, intervals=None, frame=0, schedule="white"):
     """Point-sampled VO (:func:`vo_point`); ``intervals``: the G-buffer's solid intervals
     (``thickness="layers"``, resolved by the caller; ``thickness`` is then None)."""
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness,
                                noise_size=noise_size)
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     kernel = partial(_point_kernel, radius=radius, pattern=pattern, normal_clamp=normal_clamp,
                      thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
                      texture=texture, intervals=intervals)
@@ -115,7 +115,7 @@ def point_taps(samples=12) -> int:
     Parameters
     ----------
     samples : int or SamplePattern, optional
-        As in :func:`vo_point`: a count n >= 1 for the default pattern
+        As in :func:`vo_point`: a count 1 <= n <= 65536 for the default pattern
         ``vobscure.patterns.ball(n)`` (default 12), or a ball pattern ((n, 3) ``points``).
 
     Returns
@@ -126,7 +126,7 @@ def point_taps(samples=12) -> int:
     Raises
     ------
     ValueError
-        If ``samples`` is neither a count >= 1 nor a ball pattern.
+        If ``samples`` is neither a count 1 <= n <= 65536 nor a ball pattern.
 
     Examples
     --------
@@ -202,7 +202,8 @@ def _point_kernel(px, *, radius, pattern, normal_clamp, thickness, falloff, fetc
 @C.inner_frame
 def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, thickness=None,
              falloff: str = "constant", randomize: bool = True, seed=0, fetch: str = "bilinear",
-             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+             offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+             schedule: str = "white") -> np.ndarray:
     """Volumetric Obscurance by point sampling of the ball (Loos & Sloan 2010, Sec. 4).
 
     Each 3-D sample X = p + R s of the ball pattern is projected to the screen and is
@@ -230,7 +231,12 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         ``vobscure.patterns.ball(n)`` (default 12: the smaller point configuration of Loos &
         Sloan 2010, Table 1, and ``vobscure compare``'s default), or a
         :class:`~vobscure.patterns.SamplePattern` with (n, 3) ``points`` in the unit ball
-        and (n,) volume ``weights``.
+        and (n,) volume ``weights``. Counts n <= 40, 64, 65, 128, 129, 256 and 257 load
+        from the precomputed tables; any other count is built by the quick generator
+        (:mod:`vobscure.patterns.quick`: about a second at most, once per process): a
+        spherical-Fibonacci spiral refined by a bounded electrostatic relaxation for
+        n <= 512, the spiral as it is above. n > 65536 raises ValueError (for converged
+        values use :func:`vo_reference`).
     normal_clamp : bool, optional
         Reflect samples below the tangent plane above it (Sec. 4.4, after Filion &
         McNaughton 2008): the half-ball on the normal's side. A plane then reads 1.0
@@ -270,6 +276,13 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         Edge of the tiled random texture in pixels (>= 1, default
         ``vobscure.screenspace._common.NOISE_SIZE`` = 4): pixel (i, j) uses texel
         (i mod noise_size, j mod noise_size). Unused without ``randomize``.
+    frame : int, optional
+        The frame (>= 0, default 0) of the noise ``schedule``.
+    schedule : {"white", "rotate", "r2", "gtao", "blue"}, optional
+        How the texture changes from frame to frame (:mod:`vobscure.screenspace.noise`,
+        ``docs/screenspace.md``, "Noise schedules"): ``"white"`` (default; frame 0 is the
+        texture above), ``"rotate"``, ``"r2"`` or ``"gtao"`` (a 64 x 64 tile whatever
+        ``noise_size``). Both are unused without ``randomize`` (and checked either way).
 
     Returns
     -------
@@ -284,8 +297,8 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
         If ``gbuffer`` is not a GBuffer, ``radius`` is not a positive finite number,
         ``thickness`` is neither None, a positive finite number nor ``"layers"`` (or is
         ``"layers"`` and ``gbuffer.intervals`` is None), ``samples`` is neither a count >= 1
-        nor a ball pattern, ``seed`` or ``noise_size`` is invalid, or a choice argument is not
-        one of its values; the message names the argument.
+        nor a ball pattern, ``seed``, ``noise_size`` or ``frame`` is invalid, or a choice argument
+        (``schedule`` among them) is not one of its values; the message names the argument.
 
     Notes
     -----
@@ -334,11 +347,12 @@ def vo_point(gbuffer, *, radius: float, samples=12, normal_clamp: bool = False, 
     >>> bool(np.array_equal(a, b, equal_nan=True))
     True
     """
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     intervals = C.solid_intervals(gbuffer, thickness)
     return _point_vo(gbuffer, radius=radius, pattern=C.as_pattern(samples, 3), normal_clamp=normal_clamp,
                      thickness=None if intervals is not None else thickness, falloff=falloff,
                      randomize=randomize, seed=seed, fetch=fetch, offscreen=offscreen, noise_size=noise_size,
-                     intervals=intervals)
+                     intervals=intervals, frame=frame, schedule=schedule)
 
 
 @C.inner_frame
@@ -439,6 +453,7 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     >>> float(ref.value[4, 4]), float(ref.stderr[4, 4]), ref.samples
     (1.0, 0.0, 256)
     """
+    normal_clamp = C.check_bool(normal_clamp, "normal_clamp")
     return _reference(gbuffer, radius=radius, samples=samples, normal_clamp=normal_clamp,
                       thickness=thickness, falloff=falloff, seed=seed, fetch=fetch, offscreen=offscreen,
                       groups=groups, progress=progress, along="segment")

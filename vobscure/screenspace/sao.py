@@ -34,7 +34,8 @@ def sao_taps(samples: int) -> int:
     return check_int(samples, "samples")
 
 
-def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_size, seed, randomize):
+def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_size, seed, randomize, frame,
+           schedule):
     """The arguments :func:`alchemy` and :func:`sao` share, validated, and the rotation texture:
     ``(gb, radius, samples, sigma, k, epsilon, beta, texture)``."""
     gb = C.as_gbuffer(gbuffer)
@@ -46,7 +47,7 @@ def _check(gbuffer, radius, samples, sigma, k, epsilon, beta, offscreen, noise_s
     check_choice(offscreen, "offscreen", C.OFFSCREEN)
     check_int(noise_size, "noise_size")
     beta = check_positive(beta, "beta", allow_zero=True)
-    texture = C.noise_texture(noise_size, seed, 2, randomize)
+    texture = C.noise_texture(noise_size, seed, 2, randomize, frame=frame, schedule=schedule)
     return gb, radius, samples, sigma, k, epsilon, beta, texture
 
 
@@ -58,7 +59,9 @@ def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offsc
     the tiled rotation texture: (cos phi u0 - sin phi w0, sin phi u0 + cos phi w0). Pixels
     are processed in groups that share one texel (:func:`~vobscure.screenspace._common.
     noise_classes`), so a group's rotated offsets are s scalars and only the projected
-    radius varies per pixel.
+    radius varies per pixel; with a large tile (``"r2"``, ``"gtao"``) each pixel's offsets
+    are turned by its own texel, by the same operations on arrays, so the two groupings give
+    the same values bit for bit.
 
     A tap moves to the centre of the pixel it falls in (off the image: to the nearest border
     pixel with ``offscreen="clamp"``), and Q is that pixel's view-space point (its depth on
@@ -79,7 +82,13 @@ def _disk_sums(gb, radius: float, u0: np.ndarray, w0: np.ndarray, texture, offsc
     depth_nan = _background_as_nan(depth64)
     for chunk, rotation in C.noise_classes(depth64, (H, W), texture):
         px = C.prepare(gb, radius, index=chunk, depth64=depth64)
-        cphi, sphi = (1.0, 0.0) if rotation is None else (float(rotation[0]), float(rotation[1]))
+        if rotation is None:
+            cphi, sphi = 1.0, 0.0
+        elif rotation.ndim == 1:
+            cphi, sphi = float(rotation[0]), float(rotation[1])
+        else:
+            # a texel per pixel (a large tile): the same operations on (k,) arrays
+            cphi, sphi = np.ascontiguousarray(rotation[:, 0]), np.ascontiguousarray(rotation[:, 1])
         k = len(chunk)
         centre_x, centre_y = px.col + 0.5, px.row + 0.5
         p = px.p
@@ -162,7 +171,8 @@ def _dot_products(px: C.Pixels):
 @C.inner_frame
 def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, sigma: float = 1.0,
             k: float = 1.0, epsilon: float = 1e-4, randomize: bool = True, seed=0,
-            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+            offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+            schedule: str = "white") -> np.ndarray:
     """Alchemy screen-space ambient obscurance (McGuire, Osman, Bukowski & Hennessy 2011).
 
     For each pixel's view-space point C with normal n, ``samples`` taps on the projection
@@ -203,6 +213,9 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
         ``"clamp"``) or finds no occluder (``"open"``).
     noise_size : int
         Edge of the rotation texture in pixels (>= 1).
+    frame, schedule : int, str
+        The frame (>= 0, default 0) of a noise schedule (default ``"white"``), as for
+        :func:`vobscure.vo_point`; unused without ``randomize``.
 
     Returns
     -------
@@ -242,7 +255,8 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
     1.0
     """
     gb, radius, s, sigma, k, epsilon, beta, texture = _check(gbuffer, radius, samples, sigma, k, epsilon, beta,
-                                                             offscreen, noise_size, seed, randomize)
+                                                             offscreen, noise_size, seed, randomize, frame,
+                                                             schedule)
     i = np.arange(s)
     rho = np.sqrt((i + 0.5) / s)
     theta = i * GOLDEN_ANGLE
@@ -278,7 +292,8 @@ def alchemy(gbuffer, *, radius: float, samples: int = 12, beta: float = 1e-4, si
 @C.inner_frame
 def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: float = 0.01,
         sigma: float = 1.0, k: float = 1.0, epsilon: float = 0.01, randomize: bool = True, seed=0,
-        offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE) -> np.ndarray:
+        offscreen: str = "clamp", noise_size: int = C.NOISE_SIZE, frame: int = 0,
+        schedule: str = "white") -> np.ndarray:
     """Scalable Ambient Obscurance (McGuire, Mara & Luebke 2012).
 
     Taps on the SAO spiral: tap i of s has alpha_i = (i + 1/2) / s, screen-space distance
@@ -310,7 +325,7 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
         Intensity (in units of the radius, see :func:`alchemy`) and contrast exponent.
     epsilon : float
         Regularizer of the denominator as a fraction of r^2 (> 0, default 0.01).
-    randomize, seed, offscreen, noise_size
+    randomize, seed, offscreen, noise_size, frame, schedule
         As for :func:`alchemy` (phi from the texture; phi = 0 without ``randomize``).
 
     Returns
@@ -362,7 +377,8 @@ def sao(gbuffer, *, radius: float, samples: int = 12, turns: int = 7, beta: floa
     1.0
     """
     gb, radius, s, sigma, k, epsilon, beta, texture = _check(gbuffer, radius, samples, sigma, k, epsilon, beta,
-                                                             offscreen, noise_size, seed, randomize)
+                                                             offscreen, noise_size, seed, randomize, frame,
+                                                             schedule)
     tau = check_int(turns, "turns")
     # SAO's spiral (reference shader, tapLocation): alpha_i = (i + 0.5) / s, h_i = r' alpha_i,
     # theta_i = 2 pi alpha_i tau + phi

@@ -68,7 +68,8 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
          thickness_scale: str = "constant", thickness_far: float = 0.0, weighting: str = "cosine",
          sectors: int = 32, sector_rule: str = "centre", step_power: float = SAMPLE_DISTRIBUTION_POWER,
          randomize: bool = True, seed=0, fetch: str = "bilinear", offscreen: str = "clamp",
-         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel") -> np.ndarray:
+         noise_size: int = C.NOISE_SIZE, step_jitter: str = "pixel", frame: int = 0,
+         schedule: str = "white") -> np.ndarray:
     """Ambient occlusion within ``radius`` by a visibility bitmask per slice (VBAO).
 
     The slices, steps and taps are :func:`vobscure.screenspace.gtao.gtao`'s (same arguments,
@@ -131,7 +132,7 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
     step_power : float, optional
         Step j of n reaches ((j + u) / n) ** step_power of the radius (> 0;
         default 2, XeGTAO's and Bevy's; 1: linear; SSRT3's ``_ExpFactor``).
-    randomize, seed, fetch, offscreen, noise_size, step_jitter
+    randomize, seed, fetch, offscreen, noise_size, step_jitter, frame, schedule
         As in :func:`vobscure.screenspace.gtao.gtao`.
 
     Returns
@@ -182,7 +183,7 @@ def vbao(gbuffer, *, radius: float, slices: int = 3, steps: int = 3, thickness=N
                      thickness_scale=thickness_scale, thickness_far=thickness_far, weighting=weighting,
                      sectors=sectors, sector_rule=sector_rule, step_power=step_power, randomize=randomize,
                      fetch=fetch, offscreen=offscreen, noise_size=noise_size, step_jitter=step_jitter)
-    texture = C.noise_texture(noise_size, seed, 3, randomize)
+    texture = C.noise_texture(noise_size, seed, 3, randomize, frame=frame, schedule=schedule)
     kernel = partial(_vbao_kernel, radius=radius, texture=texture, intervals=gbuffer.intervals, **options)
     return C.run_chunks(gbuffer, radius, kernel, C.out_dtype(gbuffer), chunk=CHUNK_PIXELS)
 
@@ -207,8 +208,7 @@ def _check(gbuffer, *, radius, slices, steps, thickness, thickness_scale, thickn
         raise ValueError(f"sectors must be an integer in 1 .. {MAX_SECTORS}, got {sectors!r}")
     if weighting == "eevee" and sectors != 32:
         raise ValueError(f"sectors must be 32 with weighting='eevee' (Blender's weights), got {sectors!r}")
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise ValueError(f"randomize must be True or False, got {randomize!r}")
+    C.check_bool(randomize, "randomize")
     check_choice(step_jitter, "step_jitter", STEP_JITTERS)
     C.check_common(fetch=fetch, offscreen=offscreen, noise_size=noise_size)
     return dict(slices=C.check_int(slices, "slices"), steps=C.check_int(steps, "steps"), thickness=value,

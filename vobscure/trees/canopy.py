@@ -60,6 +60,12 @@ K_XATOL = 1e-6
 
 
 # ----------------------------------------------------------------------------- validation
+#: How far outside [0, 1] a reference given to the fits may stray: a noisy reference (a
+#: Monte Carlo estimate, a reference with measurement noise of a few hundredths) does, and
+#: still fits correctly; further out the values are not visibilities (all -1, say).
+REFERENCE_SLACK = 0.1
+
+
 def _check_shell(shell, name: str = "shell", *, multi: bool = True):
     kinds = (Sphere, Ellipsoid, MultiShell) if multi else (Sphere, Ellipsoid)
     if not isinstance(shell, kinds):
@@ -74,21 +80,35 @@ def _cap_optical_depth(x: np.ndarray, m: np.ndarray) -> np.ndarray:
 
     ``m`` are the normals in the unit frame, of any non-zero length: with n = m / |m|,
     n.x = (m.x) / |m| and the in-plane distance d^2 = |x|^2 - (n.x)^2, so no unit normals
-    are formed (one pass fewer over three components)."""
+    are formed (one pass fewer over three components).
+
+    Far points are computed stably: each x is divided by s = max(1, max_i |x_i|) before the
+    squares are formed, and f = (h/s)^2 / ((d/s)^2 + (h/s)^2) is the same ratio, so d^2 never
+    overflows (s = 1, an exact division, for every point within a few radii of the shell)."""
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"points must be finite and not so far from the shell that their coordinates in its "
+                         f"unit frame overflow; {int(np.count_nonzero(~np.all(np.isfinite(x), axis=1)))} "
+                         f"point(s) do")
     mm = np.einsum("ij,ij->i", m, m)
     check_normal_lengths(mm)
+    s = np.max(np.abs(x), axis=1)
+    np.maximum(s, 1.0, out=s)
+    x = x / s[:, None]                                            # x / s, every coordinate in [-1, 1]
     n_dot_x = np.einsum("ij,ij->i", m, x)
-    n_dot_x /= np.sqrt(mm)                                        # n.(x - c), R = 1
+    n_dot_x /= np.sqrt(mm)                                        # n.(x - c) / s, R = 1
     d2 = np.einsum("ij,ij->i", x, x)
-    d2 -= n_dot_x * n_dot_x                                       # d^2, distance to the disk's centre
+    d2 -= n_dot_x * n_dot_x                                       # (d / s)^2, distance to the disk's centre
     np.maximum(d2, 0.0, out=d2)
+    n_dot_x *= s
     h = np.subtract(1.0, n_dot_x, out=n_dot_x)
     np.clip(h, 0.0, 2.0, out=h)                                   # h = R - n.(x - c), clamped to [0, 2R]
     h2 = h * h
     V_cap = np.pi / 3.0 * h2 * (3.0 - h)                          # Hegeman 2006, Eq. 4 (R = 1)
+    h_s = h / s
+    h_s2 = h_s * h_s                                              # (h / s)^2
     den = d2
-    den += h2
-    f = np.divide(h2, den, out=np.ones_like(h2), where=den > 0)  # Hegeman 2006, Eq. 5 (f = 1 at h = d = 0)
+    den += h_s2
+    f = np.divide(h_s2, den, out=np.ones_like(h2), where=den > 0)  # Hegeman 2006, Eq. 5 (f = 1 at h = d = 0)
     V_cap *= f
     return V_cap
 
@@ -96,15 +116,17 @@ def _cap_optical_depth(x: np.ndarray, m: np.ndarray) -> np.ndarray:
 def _shell_optical_depth(points: np.ndarray, normals: np.ndarray, shell) -> np.ndarray:
     """f * V_cap in world volume (the unit frame's times ``volume_scale``), float64 (m,)."""
     if isinstance(shell, Sphere):
-        x = shell.to_unit(points)
+        with np.errstate(over="ignore"):             # an overflow is reported by _cap_optical_depth
+            x = shell.to_unit(points)
         m = np.asarray(normals, dtype=np.float64)    # a sphere's map keeps directions
     else:
         # the ellipsoid's map x -> diag(radii)^-1 Q^T (x - c) and, for normals, its inverse
         # transpose n -> diag(radii) Q^T n (Sec. 3), each as one (3, 3) product; the normals'
         # lengths are left to _cap_optical_depth
         A = shell.rotation / shell.radii
-        x = np.asarray(points, dtype=np.float64) @ A
-        x -= shell.center @ A
+        with np.errstate(over="ignore", invalid="ignore"):   # non-finite results are reported below
+            x = np.asarray(points, dtype=np.float64) @ A
+            x -= shell.center @ A
         if not np.all(np.isfinite(x)):
             raise ValueError(f"points must be finite; they hold {int(np.count_nonzero(~np.isfinite(x)))} NaN "
                              f"or inf value(s)")
@@ -325,6 +347,17 @@ def _fit_weights(weights, like: np.ndarray) -> np.ndarray:
     return w
 
 
+def _check_reference_range(v: np.ndarray) -> None:
+    """A reference is a visibility: values further than :data:`REFERENCE_SLACK` outside
+    [0, 1] (NaN aside) are an error, since no density fits them and the least squares would
+    run off to an extreme one."""
+    bad = (v < -REFERENCE_SLACK) | (v > 1.0 + REFERENCE_SLACK)
+    if np.any(bad):
+        raise ValueError(f"reference must be visibilities in [0, 1] (within {REFERENCE_SLACK} for noise; NaN "
+                         f"entries are ignored); {int(np.count_nonzero(bad))} value(s) lie outside, e.g. "
+                         f"{float(v[bad][0])!r}")
+
+
 def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     r"""The alpha*rho whose Eq. 6 visibility best fits a reference (least squares).
 
@@ -333,8 +366,9 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     points, normals, shell
         As in ``canopy_visibility``.
     reference : (n,) float
-        The reference visibility at each point (a ray-traced AO, say). NaN entries are
-        ignored; inf is rejected.
+        The reference visibility at each point (a ray-traced AO, say), in [0, 1]. NaN
+        entries are ignored; inf and values further than ``REFERENCE_SLACK`` outside
+        [0, 1] are rejected.
     weights : (n,) float or None, keyword-only
         Non-negative weights of the squared residuals (1 each by default); e.g. 1/stderr^2.
 
@@ -347,8 +381,9 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     Raises
     ------
     ValueError
-        Shapes that disagree, inf in ``reference``, negative or non-finite ``weights``, or
-        nothing to fit (no point with a finite reference, a positive weight and tau > 0).
+        Shapes that disagree, inf in ``reference`` or values outside [0, 1] by more than
+        ``REFERENCE_SLACK``, negative or
+        non-finite ``weights``, or nothing to fit (no point with a finite reference, a positive weight and tau > 0).
 
     Notes
     -----
@@ -381,6 +416,7 @@ def fit_density(points, normals, shell, reference, *, weights=None) -> float:
     v = as_array(reference, "reference", shape=(tau.shape[0],), finite=False)
     if np.any(np.isinf(v)):
         raise ValueError("reference must not hold inf (NaN entries are ignored)")
+    _check_reference_range(v)
     w = _fit_weights(weights, tau)
     use = np.isfinite(v) & (w > 0) & (tau > 0)
     if not np.any(use):
@@ -445,8 +481,9 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     Raises
     ------
     ValueError
-        Shapes that disagree, NaN or inf in ``reference`` or ``weights``, negative
-        ``weights``, or a ``shell`` of another type.
+        Shapes that disagree, NaN or inf in ``reference`` or ``weights``, ``reference``
+        values outside [0, 1] by more than ``REFERENCE_SLACK``, negative ``weights``, or a
+        ``shell`` of another type.
 
     Notes
     -----
@@ -471,6 +508,7 @@ def fit_reeves_blau(points, shell, reference, *, weights=None) -> float:
     _check_shell(shell)
     P = as_array(as_raw_points(points, "points"), "points")
     ref = as_array(reference, "reference", shape=(P.shape[0],))
+    _check_reference_range(ref)
     w = _fit_weights(weights, ref)
 
     def loss(log_k):

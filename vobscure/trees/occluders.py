@@ -19,7 +19,7 @@ import numpy as np
 
 from .._validate import as_array, as_points, as_unit_vectors, check_choice, check_int, check_positive
 from ._arrays import as_raw_points, out_dtype
-from .poisson import sphere_transmittance
+from .poisson import check_quadrature, sphere_transmittance
 from .shells import Sphere
 
 __all__ = [
@@ -253,7 +253,8 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
         the solid-angle fraction.
     quadrature : int
         Gauss-Legendre nodes per piece of the porous model's polar integral (four pieces,
-        so 4 x ``quadrature`` chord lengths per point and sphere).
+        so 4 x ``quadrature`` chord lengths per point and sphere), at most
+        ``MAX_QUADRATURE`` = 1024 (:mod:`vobscure.trees.poisson`).
     chunk : int
         Points processed at once (at most ``POROUS_CHUNK`` = 8192 for "porous"); the
         temporaries are a few hundred bytes times that, whatever n.
@@ -353,7 +354,7 @@ def occluder_visibility(points, normals, spheres, *, model: str = "hegeman", sig
             raise ValueError("model='porous' needs sigma, the extinction per unit length "
                              "(sigma = 2 pi R^2 alpha_rho / 3 from the canopy density alpha_rho)")
         sigmas = _as_sigmas(sigma, len(spheres))
-        quadrature = check_int(quadrature, "quadrature", minimum=1)
+        quadrature = check_quadrature(quadrature, "quadrature")
     elif sigma is not None:
         raise ValueError(f"sigma is used by model='porous' only, not by model={model!r}")
     if model == "porous":
@@ -401,7 +402,8 @@ def grass_visibility(height, blade_height, cos_theta) -> np.ndarray:
     -------
     ndarray
         The broadcast shape of the three inputs, visibility in [0, 1]; float32 when every
-        array input is float32, float64 otherwise.
+        array input is float32, float64 otherwise. Empty inputs give an empty array, as
+        the other models do.
 
     Notes
     -----
@@ -434,6 +436,8 @@ def grass_visibility(height, blade_height, cos_theta) -> np.ndarray:
         raise ValueError(f"height {P_z.shape}, blade_height {h.shape} and cos_theta {ct.shape} must "
                          "broadcast to one shape") from None
     V = np.empty(P_z.shape, dtype=out_dtype(height, blade_height, cos_theta))
+    if V.size == 0:
+        return V
     if V.ndim == 0:
         V[()] = _grass(P_z, h, ct)
         return V
@@ -455,6 +459,7 @@ def _grass(P_z, h, ct):
     if np.any(np.abs(ct) > 1.0 + COS_THETA_SLACK):
         raise ValueError(f"cos_theta must lie in [-1, 1]; got {float(ct[np.abs(ct) > 1.0 + COS_THETA_SLACK].flat[0])!r}")
     V = np.clip(P_z, 0.0, h)                               # P_z below the root or above the tip
-    V /= 2.0 * h
+    V /= h                                                 # P_z / h in [0, 1]: h itself is never doubled,
+    V *= 0.5                                               # so an h near the float maximum cannot overflow
     V *= 1.0 + np.clip(ct, -1.0, 1.0)                      # Hegeman 2006, Eq. 9: P_z / (2h) (1 + cos theta)
     return V

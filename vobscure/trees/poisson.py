@@ -62,6 +62,11 @@ WEIGHTINGS = ("cosine", "uniform")
 #: Gauss-Legendre nodes per piece of :func:`sphere_transmittance`'s integral in psi (two
 #: pieces for a point outside the sphere, four inside).
 DEFAULT_QUADRATURE = 16
+#: Largest number of Gauss-Legendre nodes accepted (``quadrature`` of
+#: :func:`sphere_transmittance` and of the porous occluders, ``nodes`` of
+#: :func:`poisson_quadrature`): the nodes come from the eigenvalues of a (count, count)
+#: matrix, 8 MB at this limit and 75 GB at 10^5. The default's error is already below 1e-6.
+MAX_QUADRATURE = 1024
 #: Cells of the table along its radial coordinate, on each side of the surface: inside,
 #: ``a = 1 - (1 - rho)^(1/3)`` in [0, 1] (cells shrink as the cube toward the surface, where
 #: V changes over a depth of about 1 / sigma: the last spans 4e-6 radii); outside,
@@ -96,6 +101,16 @@ _TINY = 1e-300
 
 
 # ----------------------------------------------------------------------------- the core
+def check_quadrature(value, name: str) -> int:
+    """A node count in [1, :data:`MAX_QUADRATURE`], named ``name`` in the error."""
+    count = check_int(value, name, minimum=1)
+    if count > MAX_QUADRATURE:
+        raise ValueError(f"{name} must be at most MAX_QUADRATURE = {MAX_QUADRATURE} Gauss-Legendre nodes "
+                         f"(their computation needs a ({name}, {name}) matrix: {8 * count * count / 2**30:.3g} "
+                         f"GiB for {count}); got {count}. The default {DEFAULT_QUADRATURE} is accurate to 1e-6")
+    return count
+
+
 def _gauss_nodes(count: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Legendre nodes and weights on [0, pi]."""
     z, w = np.polynomial.legendre.leggauss(count)
@@ -197,7 +212,8 @@ def sphere_transmittance(points, normals, sphere, *, extinction: float, weightin
     weighting : {"cosine", "uniform"}, keyword-only
         The hemisphere weight (module docstring).
     quadrature : int, keyword-only
-        Gauss-Legendre nodes per piece (two pieces outside the sphere, four inside).
+        Gauss-Legendre nodes per piece (two pieces outside the sphere, four inside), at most
+        :data:`MAX_QUADRATURE`.
 
     Returns
     -------
@@ -238,7 +254,7 @@ def sphere_transmittance(points, normals, sphere, *, extinction: float, weightin
         raise ValueError(f"sphere must be a vobscure.trees.Sphere, got {type(sphere).__name__}")
     weighting = check_choice(weighting, "weighting", WEIGHTINGS)
     sigma = check_positive(extinction, "extinction", allow_inf=True, allow_zero=True)
-    count = check_int(quadrature, "quadrature", minimum=1)
+    count = check_quadrature(quadrature, "quadrature")
     x = as_points(points, "points")
     n = as_unit_vectors(normals, "normals", count=x.shape[0])
     D = sphere.center - x
@@ -248,15 +264,16 @@ def sphere_transmittance(points, normals, sphere, *, extinction: float, weightin
     if sigma == 0 or x.shape[0] == 0:
         return V
     s = sigma * sphere.radius                            # the optical depth of a radius
-    for start in range(0, x.shape[0], _QUADRATURE_CHUNK):
-        sl = slice(start, start + _QUADRATURE_CHUNK)
+    block = max(1, _QUADRATURE_CHUNK * DEFAULT_QUADRATURE // count)  # the temporaries' size whatever count
+    for start in range(0, x.shape[0], block):
+        sl = slice(start, start + block)
         L, W = _sphere_nodes(dist[sl] / sphere.radius, cos_theta[sl], weighting, count)
         V[sl] -= np.einsum("ij,ij->i", W, _absorbed(s, L))  # V = 1 - int w (1 - exp(-sigma L))
     return np.clip(V, 0.0, 1.0)
 
 
-#: Points per block of the direct quadrature (its temporaries: about ten (block, 4 quadrature)
-#: float64 arrays, 5 MB with the default 16 nodes).
+#: Points per block of the direct quadrature with the default nodes (its temporaries: about
+#: ten (block, 4 quadrature) float64 arrays, 5 MB; the block shrinks as the nodes grow).
 _QUADRATURE_CHUNK = 1024
 
 
@@ -607,7 +624,7 @@ def poisson_quadrature(points, normals, shell, *, extinction: float, weighting: 
     weighting : {"cosine", "uniform"}, keyword-only
     nodes : int, keyword-only
         Gauss-Legendre nodes in the cosine of the polar angle about the normal; twice as many
-        midpoint nodes in the azimuth.
+        midpoint nodes in the azimuth; at most :data:`MAX_QUADRATURE`.
 
     Returns
     -------
@@ -636,7 +653,7 @@ def poisson_quadrature(points, normals, shell, *, extinction: float, weighting: 
         raise ValueError(f"shell must be a Sphere or an Ellipsoid, got {type(shell).__name__}")
     weighting = check_choice(weighting, "weighting", WEIGHTINGS)
     sigma = check_positive(extinction, "extinction", allow_inf=True, allow_zero=True)
-    k = check_int(nodes, "nodes")
+    k = check_quadrature(nodes, "nodes")
     x = as_points(points, "points")
     n = as_unit_vectors(normals, "normals", count=x.shape[0])
     z, wz = np.polynomial.legendre.leggauss(k)

@@ -42,6 +42,22 @@ FLAT_TOL = 1e-9
 ENCLOSE_SLACK = 1e-10
 #: Iteration cap of Khachiyan's algorithm (the tolerance, not this cap, normally stops it).
 KHACHIYAN_MAX_ITER = 100_000
+#: The range of a shell's volume: every model multiplies by it (the canopy's optical depth,
+#: the density fits), so it must be a finite, normal float64 (no overflow to inf, no
+#: underflow to 0). For a sphere this bounds the radius to about [1.7e-103, 3.5e102].
+VOLUME_MIN = float(np.finfo(np.float64).tiny)
+VOLUME_MAX = float(np.finfo(np.float64).max)
+
+
+def _check_volume(volume_scale: float, name: str, value) -> None:
+    """Reject a shell whose volume 4/3 pi ``volume_scale`` overflows or underflows float64."""
+    volume = 4.0 / 3.0 * math.pi * volume_scale
+    if not (VOLUME_MIN <= volume <= VOLUME_MAX):
+        lo = (VOLUME_MIN / (4.0 / 3.0 * math.pi)) ** (1.0 / 3.0)
+        hi = (VOLUME_MAX / (4.0 / 3.0 * math.pi)) ** (1.0 / 3.0)
+        raise ValueError(f"{name} {value!r} gives a volume of {volume:.3g}, outside the float64 range "
+                         f"[{VOLUME_MIN:.3g}, {VOLUME_MAX:.3g}] that the models multiply by; a sphere's "
+                         f"radius must lie in [{lo:.3g}, {hi:.3g}] (rescale the scene's units)")
 
 
 # ----------------------------------------------------------------------------- shells
@@ -85,7 +101,9 @@ class Sphere(_UnitBallImage):
     Raises
     ------
     ValueError
-        If ``center`` is not three finite numbers, or ``radius`` is not positive and finite.
+        If ``center`` is not three finite numbers, or ``radius`` is not positive and finite,
+        or the volume 4/3 pi R^3 over- or underflows float64 (see
+        :data:`VOLUME_MIN`, :data:`VOLUME_MAX`).
 
     References
     ----------
@@ -108,7 +126,9 @@ class Sphere(_UnitBallImage):
         center = as_array(self.center, "center", shape=(3,)).copy()
         center.setflags(write=False)
         object.__setattr__(self, "center", center)
-        object.__setattr__(self, "radius", check_positive(self.radius, "radius"))
+        radius = check_positive(self.radius, "radius")
+        _check_volume(radius * radius * radius, "radius", radius)
+        object.__setattr__(self, "radius", radius)
 
     @property
     def volume(self) -> float:
@@ -162,8 +182,9 @@ class Ellipsoid(_UnitBallImage):
     Raises
     ------
     ValueError
-        If a radius is zero, negative or not finite, or ``rotation`` is not orthonormal
-        (to ``ORTHONORMAL_TOL``).
+        If a radius is zero, negative or not finite, the volume over- or underflows float64
+        (:data:`VOLUME_MIN`, :data:`VOLUME_MAX`), or ``rotation`` is not orthonormal (to
+        ``ORTHONORMAL_TOL``).
 
     References
     ----------
@@ -189,6 +210,7 @@ class Ellipsoid(_UnitBallImage):
         if np.any(radii <= 0):
             raise ValueError(f"radii must be three positive numbers (a degenerate ellipsoid has a zero "
                              f"semi-axis), got {radii.tolist()}")
+        _check_volume(float(radii[0]) * float(radii[1]) * float(radii[2]), "radii", radii.tolist())
         if self.rotation is None:
             rotation = np.eye(3)
         else:
