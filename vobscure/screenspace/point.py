@@ -101,6 +101,13 @@ def _plane_tables(gbuffer, *, thickness, fetch):
     return None if labels is None else PlaneTables(labels)
 
 
+def _exact_pixels(gbuffer, radius, tables: PlaneTables) -> np.ndarray:
+    """(H, W) bool: the pixels of :func:`vobscure.screenspace._segment.on_one_plane` (every
+    view ray through the ball reads the pixel's own plane), whose reference value is exact."""
+    flat = C.run_chunks(gbuffer, radius, lambda px: on_one_plane(px, radius, tables), np.dtype(np.float64))
+    return flat == 1.0
+
+
 def _is_centre(s) -> bool:
     """True for the sample at the ball's centre, which :func:`vo_point` does not tap."""
     return not np.any(s)
@@ -434,10 +441,14 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     -------
     Estimate
         ``value`` and ``stderr`` of shape (H, W), NaN on background (float32 for a float32
-        G-buffer). Where every group agrees on a value strictly between 0 and 1, ``stderr``
-        is one step of a group mean (1 / samples per group, over sqrt(groups)) instead of 0;
-        where all agree on 0 or 1 it is 0. ``samples`` is the number of rays (points with a
-        pattern) per pixel.
+        G-buffer). ``stderr`` is 0 where the value is exact: the pixels whose every view ray
+        through the ball reads the pixel's own flat plane (a rendered G-buffer, the bilinear
+        fetch, no thickness; ``docs/screenspace.md``, "Pixels that see only their own plane"),
+        where the control variate's closed form, 1/2 (1 with ``normal_clamp``), is the value
+        and no Monte Carlo mean; and where every group reads 0 or every group reads 1. Where
+        every group agrees on another value strictly between 0 and 1, ``stderr`` is one step
+        of a group mean (1 / samples per group, over sqrt(groups)) instead of 0.
+        ``samples`` is the number of rays (points with a pattern) per pixel.
 
     References
     ----------
@@ -576,7 +587,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
         total = g * 2 * half
     else:
         total = g * len(pattern.points)
-    planes = _plane_tables(gbuffer, thickness=thickness, fetch=fetch) if shortcut and along == "segment" else None
+    tables = _plane_tables(gbuffer, thickness=thickness, fetch=fetch) if pattern is None and along == "segment" else None
+    planes = tables if shortcut else None
     mean = M2 = None
     for k in tqdm(range(1, g + 1), desc="vo_reference", unit="group", disable=not progress, leave=False):
         if pattern is None and along == "point":
@@ -613,4 +625,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
     # degenerates"), report one step of a group mean, 1 / (points per group), per group there.
     degenerate = (stderr == 0) & (mean > 0) & (mean < 1)
     stderr[degenerate] = 1.0 / ((total // g) * np.sqrt(g))
+    if tables is not None:
+        # the pixels whose every ray reads their own plane hold the control variate's closed
+        # form, 1/2 (1 clamped), in every group: no Monte Carlo error to report
+        stderr[_exact_pixels(gbuffer, radius, tables)] = 0.0
     return Estimate(value=mean.astype(dtype), stderr=stderr.astype(dtype), samples=int(total))
