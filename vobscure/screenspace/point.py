@@ -39,16 +39,16 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
 
 
 def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen, fast=True,
-            planes=None):
+            flat=None):
     """The ball VO from the view-ray segments of the ``unit`` square points (each uniform)
     (:mod:`vobscure.screenspace._segment`), toroidally shifted per pixel by a tiled
     64 x 64 texture of uniform shifts. Pixels whose ball reaches the eye's plane z = 0
     (perspective) are point sampled instead, with as many points. ``fast``: the kernel of
     :mod:`vobscure.screenspace._segment_fast` (the same values within float64 rounding);
-    False: the plain ``_segment.ray_kernel``. ``planes``: the :class:`PlaneTables` of the image
-    (:func:`_plane_tables`) or None; with them the pixels whose rays all read their own plane
-    (:func:`vobscure.screenspace._segment.on_one_plane`) take the value the kernel returns
-    there, 1/2 (1 with ``normal_clamp``), without integrating their segments."""
+    False: the plain ``_segment.ray_kernel``. ``flat``: None or the (H, W) bool image of
+    :func:`_exact_pixels` (the pixels whose rays all read their own plane), which take the
+    value the kernel returns there, 1/2 (1 with ``normal_clamp``), without integrating their
+    segments."""
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness)
@@ -80,14 +80,14 @@ def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fet
         return v
 
     def kernel(px):
-        if planes is None:
+        if flat is None:
             return segments(px)
-        flat = on_one_plane(px, radius, planes)
-        if not flat.any():
+        mine = flat.reshape(-1)[px.index]
+        if not mine.any():
             return segments(px)
         v = np.full(len(px.index), 1.0 if normal_clamp else 0.5)
-        if not flat.all():
-            v[~flat] = segments(C.prepare(gbuffer, radius, index=px.index[~flat], depth64=px.depth_flat))
+        if not mine.all():
+            v[~mine] = segments(C.prepare(gbuffer, radius, index=px.index[~mine], depth64=px.depth_flat))
         return v
     return C.run_chunks(gbuffer, radius, kernel, np.dtype(np.float64), chunk=SEGMENT_CHUNK_PIXELS if fast else C.CHUNK_PIXELS)
 
@@ -588,7 +588,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
     else:
         total = g * len(pattern.points)
     tables = _plane_tables(gbuffer, thickness=thickness, fetch=fetch) if pattern is None and along == "segment" else None
-    planes = tables if shortcut else None
+    # found once per image, for every group
+    exact = None if tables is None else _exact_pixels(gbuffer, radius, tables)
     mean = M2 = None
     for k in tqdm(range(1, g + 1), desc="vo_reference", unit="group", disable=not progress, leave=False):
         if pattern is None and along == "point":
@@ -602,7 +603,7 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
             unit = (_lattice_square if lattice else _stratified_square)(rng, total // g)
             x = _ray_vo(gbuffer, radius=radius, unit=unit, normal_clamp=normal_clamp,
                         thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen,
-                        fast=fast, planes=planes)
+                        fast=fast, flat=exact if shortcut else None)
         else:
             group_pattern = pattern if pattern is not None else SamplePattern(
                 points, np.ones(2 * half), method="stratified",
@@ -625,8 +626,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
     # degenerates"), report one step of a group mean, 1 / (points per group), per group there.
     degenerate = (stderr == 0) & (mean > 0) & (mean < 1)
     stderr[degenerate] = 1.0 / ((total // g) * np.sqrt(g))
-    if tables is not None:
+    if exact is not None:
         # the pixels whose every ray reads their own plane hold the control variate's closed
         # form, 1/2 (1 clamped), in every group: no Monte Carlo error to report
-        stderr[_exact_pixels(gbuffer, radius, tables)] = 0.0
+        stderr[exact] = 0.0
     return Estimate(value=mean.astype(dtype), stderr=stderr.astype(dtype), samples=int(total))
