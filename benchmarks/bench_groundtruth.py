@@ -46,13 +46,23 @@ What is measured (DESIGN.md, "Performance")
    Cornell box (eye (0.2, 1, 0.6) toward (-0.3, 0.7, -1), 60-degree field of view) and on the
    atrium's default view, at 1280 x 720 (160 x 90 with ``--quick``), each with the radius
    ``vobscure compare`` chooses for it (``compare.choose_radius``):
-   ``vo.vo_reference(gb, samples=references.SCREEN_SAMPLES)`` (view-ray segments) and the
-   point-sampled reference whose standard error it must match (2048 stratified points of the
-   ball) against ``vo.ground_truth(scene, gb, quantity="ao", rays=256)`` (the cosine AO within
-   the radius, compare's ``ao`` reference). Each is run ONCE, back to back (a warm-up call
-   would double minutes of work); the ratio of the times and the reported standard error of
-   each (mean, RMS, 95th percentile over the covered pixels) are printed. Goal: the reference
-   takes at most the AO's time (ratio <= 1) at no larger a standard error than the points'.
+   ``vo.vo_reference(gb, samples=references.SCREEN_SAMPLES)`` (view-ray segments on a
+   randomly shifted rank-1 lattice, 8 groups), the previous default whose standard
+   error it must match (800 rays on 8 jittered 10 x 10 grids, ``_reference(...,
+   lattice=False)``) and the point-sampled reference before it (2048 stratified points of the
+   ball), against ``vo.ground_truth(scene, gb, quantity="ao", rays=256)`` (the cosine AO
+   within the radius, compare's ``ao`` reference). Each is run ONCE, back to back (a warm-up
+   call would double minutes of work); the ratio of the times (wall clock, and CPU seconds of
+   the process, all threads, which a shared machine disturbs less) and the reported standard
+   error of each (mean, RMS, 95th percentile over the covered pixels, the exact pixels' 0
+   included: those whose every ray reads their own plane) are printed, and for the two
+   segment references also the share of exact pixels and the statistics over the pixels whose
+   stderr is neither 0 nor the floor of one step of a group mean (1 / (rays per group
+   sqrt(groups)), reported where every group reads the same value strictly between 0 and 1
+   without the value being exact: a ball whose small part beyond a neighbouring surface no
+   ray of any group met; that floor grows as the rays per group fall, whatever the
+   precision). Goal: the reference takes at most the AO's time (ratio <= 1) at no larger a
+   standard error than the previous default's.
    ``--screen-only`` runs this benchmark alone.
 
 Run from the repository root::
@@ -103,6 +113,9 @@ GOAL_GROUND_TRUTH_SECONDS = 60.0
 #: Benchmark 4: compare's default points per pixel of the screen-space reference, the view
 #: inside the Cornell box, and the goal on the reference's time over the ray-cast AO's.
 SCREEN_SAMPLES = vo.references.SCREEN_SAMPLES
+#: Rays per pixel of the segment reference before the lattice (jittered 10 x 10 grids per group):
+#: the standard error the default must not exceed.
+PREVIOUS_SCREEN_SAMPLES = 800
 #: The points per pixel of the point-sampled reference that the view-ray segments replaced
 #: (compare's default then): printed for its time and standard error beside the segments'.
 POINT_SAMPLES = 2048
@@ -361,29 +374,52 @@ def bench_screen_reference(quick: bool, threads, report: Report):
         pixels = int(gb.valid.sum())
         report.header(f"4. Screen-space reference vs ray-cast AO: {label}, {size[0]}x{size[1]}, "
                       f"{pixels} covered pixels, radius {radius:.4g}, one run each")
-        start = time.perf_counter()
-        ref = vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)
-        screen_s = time.perf_counter() - start
-        start = time.perf_counter()
-        ao = vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED, threads=threads)
-        ao_s = time.perf_counter() - start
-        start = time.perf_counter()
-        points = _reference(gb, radius=radius, samples=POINT_SAMPLES, seed=SEED, along="point", normal_clamp=False,
-                            thickness=None, falloff="constant", fetch="bilinear", offscreen="clamp",
-                            groups=DEFAULT_GROUPS, progress=False)
-        points_s = time.perf_counter() - start
+        def timed(call):
+            wall, cpu = time.perf_counter(), time.process_time()
+            out = call()
+            return out, time.perf_counter() - wall, time.process_time() - cpu
+        ref, screen_s, screen_cpu = timed(lambda: vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES,
+                                                                  seed=SEED))
+        ao, ao_s, ao_cpu = timed(lambda: vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS,
+                                                         seed=SEED, threads=threads))
+        before, before_s, before_cpu = timed(lambda: _reference(
+            gb, radius=radius, samples=PREVIOUS_SCREEN_SAMPLES, seed=SEED, along="segment", normal_clamp=False,
+            thickness=None, falloff="constant", fetch="bilinear", offscreen="clamp", groups=DEFAULT_GROUPS,
+            progress=False, lattice=False))
+        points, points_s, points_cpu = timed(lambda: _reference(
+            gb, radius=radius, samples=POINT_SAMPLES, seed=SEED, along="point", normal_clamp=False, thickness=None,
+            falloff="constant", fetch="bilinear", offscreen="clamp", groups=DEFAULT_GROUPS, progress=False))
         valid = gb.valid
 
-        def stderr(e):
+        def stats(se):
+            return f"mean {se.mean():.5f} rms {np.sqrt(np.mean(se ** 2)):.5f} p95 {np.percentile(se, 95):.5f}"
+
+        def stderr(e, cpu, rays=None):
             se = e.stderr[valid].astype(np.float64)
-            return (f"stderr mean {se.mean():.5f} rms {np.sqrt(np.mean(se ** 2)):.5f} "
-                    f"p95 {np.percentile(se, 95):.5f}")
-        report.row(f"vo_reference(samples={SCREEN_SAMPLES})", screen_s, None, screen_s / ao_s, stderr(ref))
+            text = f"cpu {cpu:.1f} s ({cpu / ao_cpu:.2f}x the AO's); stderr {stats(se)}"
+            if rays is not None:
+                floor = 1.0 / ((rays // DEFAULT_GROUPS) * np.sqrt(DEFAULT_GROUPS))
+                on_floor = np.isclose(se, floor, rtol=1e-6, atol=0.0)
+                off = ~on_floor & (se > 0)
+                text += (f"; exact {np.mean(se == 0):.0%} of pixels, on the floor {on_floor.mean():.0%}; "
+                         f"the others {stats(se[off])}")
+            return text
+        report.row(f"vo_reference(samples={SCREEN_SAMPLES})", screen_s, None, screen_s / ao_s,
+                   stderr(ref, screen_cpu, SCREEN_SAMPLES))
+        report.row(f"previous default ({PREVIOUS_SCREEN_SAMPLES} rays, jittered grids)", before_s, None,
+                   before_s / ao_s, stderr(before, before_cpu, PREVIOUS_SCREEN_SAMPLES))
         report.row(f"point-sampled reference ({POINT_SAMPLES} points)", points_s, None, points_s / ao_s,
-                   stderr(points))
-        report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None, stderr(ao))
+                   stderr(points, points_cpu))
+        report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None,
+                   stderr(ao, ao_cpu))
         report.goal(f"[{label} {size[0]}x{size[1]}] vo_reference / ground_truth ao (time)",
                     screen_s / ao_s, GOAL_SCREEN_OVER_AO, at_least=False)
+        report.goal(f"[{label} {size[0]}x{size[1]}] vo_reference / ground_truth ao (CPU time)",
+                    screen_cpu / ao_cpu, GOAL_SCREEN_OVER_AO, at_least=False)
+        for name, statistic in (("mean", np.mean), ("RMS", lambda a: np.sqrt(np.mean(a ** 2))),
+                                ("p95", lambda a: np.percentile(a, 95))):
+            mine, theirs = (statistic(e.stderr[valid].astype(np.float64)) for e in (ref, before))
+            report.goal(f"[{label}] stderr {name} / the previous default's", mine / theirs, 1.0, at_least=False)
 
 
 # --------------------------------------------------------------------------- main

@@ -47,11 +47,75 @@ def _noise_pairs(gb, floor, **kw):
     return r1, r2
 
 
+#: Sub-cells per pixel side of the midpoint rule that integrates the bilinear depth's cut
+#: corner (:func:`_cut_corner_volume`): the cut's depth is piecewise smooth on the pixel
+#: scale, so 8 x 8 midpoints per pixel leave an error far below the z-test's resolution
+#: (4 x 4 moves the predicted mean offset by 2 %, a sixth of the test's resolution).
+CUT_CORNER_SUBCELLS = 8
+
+
+def _cut_corner_volume(gb, pixels, radius, sub=CUT_CORNER_SUBCELLS):
+    """(k,) volume inside each of the ``pixels``' balls of the crease's cut corner: the space
+    between the true surface and the bilinear interpolation of the depth buffer's pixel
+    centres, which the reference's bilinear fetch takes for the surface.
+
+    Independent of the estimators: the true depth of the orthographic view is the nearer of
+    the floor's and the wall's planes (depth affine in the pixel position, fitted to their
+    pixels), the bilinear depth is scipy's ``map_coordinates`` of the centres; near the
+    concave edge the interpolation lies in front of the surface, and each ball's part of that
+    sliver is integrated by the midpoint rule on ``sub`` x ``sub`` cells per pixel (each cell's
+    column between the two depths, clipped to the ball's chord).
+    """
+    from scipy import ndimage
+
+    H, W = gb.shape
+    depth = gb.depth.astype(np.float64)
+    wp = gb.world_position
+    i, j = np.mgrid[0:H, 0:W]
+    planes = []
+    for on in (gb.valid & (np.abs(wp[..., 1]) < 1e-9), gb.valid & (np.abs(wp[..., 0]) < 1e-9)):
+        A = np.column_stack([j[on] + 0.5, i[on] + 0.5, np.ones(on.sum())])
+        planes.append(np.linalg.lstsq(A, depth[on], rcond=None)[0])
+
+    def true_depth(x, y):
+        return np.minimum(*(c[0] * x + c[1] * y + c[2] for c in planes))
+    # every pixel sees the floor or the wall, the nearer one (the edge is concave)
+    assert np.allclose(true_depth(j + 0.5, i + 0.5)[gb.valid], depth[gb.valid], rtol=1e-5, atol=0.0)
+    X, Y = np.meshgrid((np.arange(W * sub) + 0.5) / sub, (np.arange(H * sub) + 0.5) / sub)
+    between = (X >= 0.5) & (X <= W - 0.5) & (Y >= 0.5) & (Y <= H - 0.5)   # between pixel centres
+    X, Y = X[between], Y[between]
+    front = ndimage.map_coordinates(depth, [Y - 0.5, X - 0.5], order=1)
+    back = true_depth(X, Y)
+    cut = back > front
+    X, Y, front, back = X[cut], Y[cut], front[cut], back[cut]
+    unit = gb.camera.ortho_height / H                      # world units per pixel
+    rows, cols = np.nonzero(pixels)
+    out = np.empty(len(rows))
+    for k, (a, b) in enumerate(zip(rows, cols)):
+        h = np.sqrt(np.maximum(radius ** 2 - ((X - b - 0.5) ** 2 + (Y - a - 0.5) ** 2) * unit ** 2, 0.0))
+        z = depth[a, b]
+        out[k] = np.clip(np.minimum(back, z + h) - np.maximum(front, z - h), 0.0, None).sum()
+    return out * (unit / sub) ** 2
+
+
 def test_reference_is_unbiased_on_the_crease(crease_view):
     """vo_reference is Monte Carlo: its mean error over the floor pixels is tested against
-    the spread of two independent references (a z-test), not against a fixed tolerance."""
+    the spread of two independent references (a z-test), not against a fixed tolerance.
+
+    The reference integrates the depth buffer's occupancy, and its bilinear fetch cuts the
+    crease's concave corner (between the last floor and the first wall pixel centres the
+    interpolated surface lies in front of the true one): that sliver counts as occupied. Its
+    volume inside each ball (:func:`_cut_corner_volume`, about 2.7e-4 R^3: a mean offset of
+    -6.4e-5 unclamped, twice that in the half-ball, which holds all of it) is the screen-space
+    model's, not a sampling error, so the expectation tested is the closed form minus it.
+    Against the closed form alone the 2048-ray lattice reference is precise enough to see it
+    (z near -6.4 unclamped); against the corrected form z is ordinary.
+    """
     gb, floor, c = crease_view
-    for kw, exact in ((dict(), crease_vo(c)), (dict(normal_clamp=True), crease_vo_clamped(c))):
+    cut = _cut_corner_volume(gb, floor, R_CREASE)
+    ball = 4.0 * np.pi / 3.0 * R_CREASE ** 3
+    for kw, exact in ((dict(), crease_vo(c) - cut / ball),
+                      (dict(normal_clamp=True), crease_vo_clamped(c) - cut / (ball / 2))):
         r1, r2 = _noise_pairs(gb, floor, **kw)
         sd = np.std((r1 - r2)[floor]) / np.sqrt(2)          # per-pixel noise of one reference
         n_eff = min(floor.sum(), 64 * 64)                    # the noise texture tiles every 64 px
@@ -167,8 +231,15 @@ def test_estimators_converge_to_reference(crease_view):
     noise_var = np.mean(((r1 - r2)[floor]) ** 2) / 2
     n_eff = min(floor.sum(), 64 * 64)
     # line with many samples: its squared difference to the reference is the reference's
-    # own noise (F test of the two variance estimates)
-    line = vo.vo_line(gb, radius=R_CREASE, samples=257, randomize=False)
+    # own noise (F test of the two variance estimates). The test can only pass when the
+    # line's quadrature error is well below that noise (about 3e-4 per pixel at 2048 lattice
+    # rays): squared, under (F quantile - 1) ~ 0.2 of its variance. Against the closed form
+    # minus the cut corner (test_reference_is_unbiased_on_the_crease), the tabulated Lloyd
+    # pattern of 257 chords errs by -3.1e-4 on average over these pixels (RMS 4.0e-4): a
+    # fixed pattern's error, not noise, and above the allowance; the 1025-chord pattern errs
+    # by 1e-6 on average (RMS 3e-5). The bilinear fetch is the reference's depth model (vo_line's default,
+    # "nearest", reads a staircase with its own expectation).
+    line = vo.vo_line(gb, radius=R_CREASE, samples=1025, randomize=False, fetch="bilinear")
     ratio = np.mean((line - r1)[floor] ** 2) / noise_var
     assert ratio < stats.f.ppf(1 - FALSE_FAILURE, n_eff, n_eff)
     # every estimator gets closer as samples grow

@@ -246,3 +246,79 @@ def test_on_one_plane_by_hand():
     assert flat[on_slab & away & (edge > 2 * reach)].all()
     assert (on_slab & away & (edge > 2 * reach)).sum() > 50
     assert S.plane_labels(vo.GBuffer.from_arrays(gb.depth, camera=gb.camera)) is None
+
+
+@pytest.mark.parametrize("ortho", [False, True])
+def test_footprint_rows_hold_every_ray_through_the_ball(ortho):
+    """Each strip's extent holds every ray of the strip that meets the ball and not much more:
+    a dense grid of rays over the box, each tested by the distance from the ball's centre to
+    its line (an independent test of the conic's roots and of where the chord is widest)."""
+    from vobscure.screenspace import _segment as S
+    from vobscure.screenspace import _common as Cm
+    gb = _plane_view(size=(24, 16), ortho=ortho)
+    R = 0.3
+    px = Cm.prepare(gb, R)
+    a0, a1, b0, b1, exact = S.ball_box(px, R)
+    pick = np.flatnonzero(exact)[::7]
+    p = px.p[pick]
+    grid = (np.arange(400) + 0.5) / 400
+    for s_lo, s_hi in ((0.0, 0.125), (0.375, 0.5), (0.5, 0.625), (0.875, 1.0), (0.0, 1.0)):
+        lo_b = b0 + s_lo * (b1 - b0)
+        hi_b = b0 + s_hi * (b1 - b0)
+        lo, hi = S.footprint_rows(px, R, lo_b, hi_b, a0, a1)
+        for k, q in enumerate(pick):
+            a, b = np.meshgrid(a0[q] + grid * (a1[q] - a0[q]), lo_b[q] + grid * (hi_b[q] - lo_b[q]))
+            if ortho:
+                dist2 = (a - p[k, 0]) ** 2 + (b - p[k, 1]) ** 2
+            else:
+                u = np.stack([a, b, np.ones_like(a)], axis=-1)
+                along = u @ p[k] / np.einsum("...i,...i", u, u)
+                dist2 = np.sum((along[..., None] * u - p[k]) ** 2, axis=-1)
+            a_in = a[dist2 < R * R]
+            assert a_in.size > 0
+            assert lo[q] <= a_in.min() and a_in.max() <= hi[q]
+            # tight: within two grid steps of the rays found (plus the pad)
+            step = 2.0 * (a1[q] - a0[q]) / 400
+            assert a_in.min() - lo[q] < step and hi[q] - a_in.max() < step
+
+
+def test_strips_check_no_less_than_the_box():
+    """The strips' test passes every pixel the box's test passes (its rectangles lie inside the
+    box's) and more beside the cube (the box's corners reach pixels no ray through the ball
+    reads); every pixel it passes reads 1/2 in every group (bit for bit, the shortcut test
+    above)."""
+    from vobscure.screenspace import _segment as S
+    from vobscure.screenspace import _common as Cm
+    gb = _plane_view(size=(60, 40))
+    R = 0.2
+    px = Cm.prepare(gb, R)
+    tables = S.PlaneTables(S.plane_labels(gb))
+    box = S.on_one_plane(px, R, tables, strips=1)
+    strips = S.on_one_plane(px, R, tables)
+    assert np.all(strips[box]) and strips.sum() > box.sum()
+
+
+@pytest.mark.parametrize("normal_clamp", [False, True])
+def test_exact_pixels_report_stderr_zero(normal_clamp):
+    """The pixels that see only their own plane carry their closed form and stderr 0; the
+    same plane in a G-buffer built from arrays (no triangle planes to prove it) reads the
+    same value in every group but keeps the floor of one step of a group mean."""
+    from vobscure.screenspace import _segment as S
+    from vobscure.screenspace import _common as Cm
+    gb = _plane_view(size=(48, 32))
+    R = 0.3
+    e = vo.vo_reference(gb, radius=R, samples=SEGMENTS, normal_clamp=normal_clamp, seed=4)
+    px = Cm.prepare(gb, R)
+    flat = np.zeros(gb.depth.size, dtype=bool)
+    flat[px.index] = S.on_one_plane(px, R, S.PlaneTables(S.plane_labels(gb)))
+    flat = flat.reshape(gb.shape)
+    assert flat.sum() > 100
+    assert np.all(e.stderr[flat] == 0) and np.all(e.value[flat] == (1.0 if normal_clamp else 0.5))
+    assert np.all(e.stderr[gb.valid & ~flat & (e.value > 0) & (e.value < 1)] > 0)
+    bare = vo.GBuffer.from_arrays(gb.depth, gb.normal, camera=gb.camera)
+    b = vo.vo_reference(bare, radius=R, samples=SEGMENTS, normal_clamp=normal_clamp, seed=4)
+    agree = flat & (b.value == e.value)
+    floor = 1.0 / ((SEGMENTS // DEFAULT_GROUPS) * np.sqrt(DEFAULT_GROUPS))
+    if not normal_clamp:
+        assert agree.sum() > 0.9 * flat.sum()
+        np.testing.assert_allclose(b.stderr[agree], floor, rtol=1e-6)
