@@ -289,18 +289,14 @@ def lazy_images_need() -> Need:
     return Need(LAZY_PIXEL)
 
 
-def reference_need(name: str, *, threads=None) -> Need:
-    """The transient peak of computing reference ``name`` (a key of the reference registry,
-    or a ground_truth quantity), its result included."""
-    if name == "screen":
+def reference_need(kind: str, *, threads=None) -> Need:
+    """The transient peak of computing a reference, its result included: ``kind`` is
+    ``"screen"`` (the converged screen-space VO) or the ground truth's quantity
+    (``"volumetric"``, ``"ao"``, ``"obscurance"``; the reference registry's
+    ``Reference.ground_truth``)."""
+    if kind == "screen":
         return Need(SCREEN_REFERENCE_PIXEL)
-    try:
-        from . import references
-
-        quantity = references.get(name).ground_truth
-    except (ValueError, KeyError):
-        quantity = name
-    if quantity == "volumetric":
+    if kind == "volumetric":
         return Need(VOLUME_PIXEL, VOLUME_THREAD * _threads(threads))
     return Need(RAYCAST_PIXEL, RAYCAST_THREAD * _threads(threads))
 
@@ -341,7 +337,8 @@ def compare_need(*, references, configs: int, radii: int = 1, layers: int = 1, f
     """compare()'s whole job: what it keeps (the G-buffer and its lazy images, every
     reference per radius, every estimate per configuration and radius, with ``frames`` the
     references of every frame and each sequence configuration's history) plus the largest
-    transient (a reference, an estimator, a layered G-buffer, or another frame's G-buffer)."""
+    transient (a reference, an estimator, a layered G-buffer, or another frame's G-buffer).
+    ``references``: the kinds of :func:`reference_need`, one per reference."""
     refs = tuple(references)
     kept = gbuffer_need(1) + lazy_images_need() + Need(REFERENCE_KEPT_PIXEL * len(refs) * radii) \
         + Need(IMAGE_PIXEL * configs * radii)

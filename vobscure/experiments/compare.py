@@ -428,7 +428,9 @@ def compare(scene="cornell_box", *, name=None, camera=None, size=None, radii=Non
 
     # the whole job's estimated peak, refused before any work when it cannot fit
     n_frames = (len(cameras) if cameras is not None else frames) if frames > 1 or cameras is not None else 0
-    require(compare_need(references=references, configs=len(configs),
+    kinds = ["screen" if _references.get(r).ground_truth is None else _references.get(r).ground_truth
+             for r in references]
+    require(compare_need(references=kinds, configs=len(configs),
                          layers=(layers or 1) if thickness == "layers" and not frame else 1, radii=1 if radii is None else len(np.atleast_1d(radii)), frames=n_frames,
                          frame_configs=len(configs) * count_items(schedules) * count_items(accumulate),
                          orbit=orbit, plots=write and plots, pixels=camera.width * camera.height),
