@@ -224,12 +224,22 @@ def _summed(a: np.ndarray) -> np.ndarray:
 class PlaneTables:
     """Summed-area tables of :func:`plane_labels` and of their squares, built once per image:
     a rectangle holds one label L when its sum is L n and its sum of squares L^2 n (zero
-    variance; exact in int64)."""
+    variance; exact in int64). With ``depth`` ((H, W), +inf on background) also the least and
+    greatest depth of each pixel's 3 x 3 neighbourhood (``near9``, ``far9``: every bilinear
+    cell with the pixel as a corner reads between them), for :func:`on_one_plane`'s test of
+    the other surfaces in a footprint."""
 
-    def __init__(self, labels: np.ndarray):
+    def __init__(self, labels: np.ndarray, depth: np.ndarray | None = None):
         self.labels = labels
         self.S1 = _summed(labels)
         self.S2 = _summed(labels * labels)
+        self.near9 = self.far9 = None
+        if depth is not None:
+            from scipy import ndimage
+            d = np.asarray(depth, dtype=np.float64)
+            d = np.where(np.isnan(d), np.inf, d)
+            self.near9 = ndimage.minimum_filter(d, size=3, mode="nearest").reshape(-1)
+            self.far9 = ndimage.maximum_filter(d, size=3, mode="nearest").reshape(-1)
 
     def one_label(self, label, r0, r1, c0, c1) -> np.ndarray:
         """Whether every pixel of rows r0..r1, columns c0..c1 (inclusive) has ``label`` > 0."""
@@ -293,9 +303,100 @@ def footprint_rows(px, radius, b_lo, b_hi, a0, a1):
     return np.maximum(lo, a0), np.minimum(hi, a1)
 
 
-def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS) -> np.ndarray:
+#: Margin of :func:`on_one_plane`'s depth tests of other surfaces, relative to |p| + R: far
+#: above the rounding of the kernel's chord ends (z_m +- h; h a square root, 1e-8 relative
+#: near the ball's rim, where the chord's end lies well inside the ball's depth range) and of
+#: the bilinear depth and the plane's depth along a ray (a few ulps), far below any scene's
+#: detail. It moves the thresholds toward "not exact".
+CLEAR_MARGIN = 1e-6
+#: Texels enumerated at once by :func:`_clear_of_ball` (memory: a few arrays of this length).
+CLEAR_BATCH = 1 << 21
+
+
+def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
+    """(len(sel),) bool for the pixels ``px.index[sel]``: whether every pixel (texel) of their
+    rectangles ``rects`` (one (c0, c1, r0, r1, one) tuple of (len(sel),) arrays per strip,
+    ``one`` where the rectangle holds the pixel's label only; None entries skip a strip) whose label is not the pixel's own lies, with its 3 x 3 neighbourhood,
+    entirely behind the ball's depth range [p_z - R, p_z + R], and the pixel's plane P lies
+    behind it too over the texel's bilinear cells; or both entirely in front of it.
+
+    Every view ray through the ball lies in that depth range (view depth is the ray's
+    parameter), so a ray whose fetched depth d and whose depth z_P on P are both beyond it
+    clips its occupied part and its part behind the tangent plane to the same end of the
+    segment (both empty behind, both the whole segment in front): its term in the control
+    variate's difference is exactly 0, as on P itself. Cells not entirely labelled P have a
+    corner that is not P; their rays land within one pixel of it, where 1/z_P (z_P under an
+    orthographic camera) is affine in the image position, bounded by its value at the texel
+    plus the gradient's reach over one pixel each way; the bilinear depth lies between the
+    corners' (``near9``, ``far9``). P's rays must meet it from its front (n . p < 0 and
+    n . u < 0 along them): the half-ball and the control variate then take the segment's
+    same side as on P.
+    """
+    R = float(radius)
+    H, W = px.shape
+    p = px.p[sel]
+    n = px.n[sel]
+    label = tables.labels.reshape(-1)[px.index[sel]]
+    m = CLEAR_MARGIN * (np.sqrt(np.einsum("ij,ij->i", p, p)) + R)
+    z_far = p[:, 2] + R + m
+    z_near = p[:, 2] - R - m
+    # minus n . p (perspective) or minus n_z (orthographic): > 0 when P faces the rays
+    facing = -np.einsum("ij,ij->i", n, p) if px.perspective else -n[:, 2]
+    ok = facing > 0
+    den = np.where(ok, facing, 1.0)
+    slack = (np.abs(n[:, 0]) / abs(px.fx) + np.abs(n[:, 1]) / abs(px.fy)) / den
+    with np.errstate(divide="ignore"):
+        inv_near = np.where(z_near > 0, 1.0 / z_near, np.inf)
+    labels = tables.labels.reshape(-1)
+    for rect in rects:
+        if rect is None:
+            continue
+        c0, c1, r0, r1, one = rect
+        w = c1 - c0 + 1
+        area = np.where(ok & ~one, w * (r1 - r0 + 1), 0)
+        ends = np.cumsum(area)
+        first = 0
+        while first < len(area):
+            last = max(first + 1, int(np.searchsorted(ends, ends[first] - area[first] + CLEAR_BATCH, "right")))
+            q = np.arange(first, min(last, len(area)))
+            first = q[-1] + 1
+            cnt = area[q]
+            if not cnt.any():
+                continue
+            rep = np.repeat(q, cnt)
+            off = np.arange(len(rep)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            row = r0[rep] + off // w[rep]
+            col = c0[rep] + off % w[rep]
+            t = row * W + col
+            other = labels[t] != label[rep]
+            rep, row, col, t = rep[other], row[other], col[other], t[other]
+            # the ray through the texel's centre: (x / z, y / z), or view (x, y)
+            a = (col + 0.5 - px.cx) / px.fx
+            b = (px.cy - (row + 0.5)) / px.fy
+            nr = n[rep]
+            s = slack[rep]
+            zf = z_far[rep]
+            if px.perspective:
+                # 1 / z_P = (n . u) / (n . p), u = (a, b, 1) (Loos & Sloan 2010, Sec. 4.4)
+                inv = -(a * nr[:, 0] + b * nr[:, 1] + nr[:, 2]) / den[rep]
+                far = (inv + s <= 1.0 / zf) & (inv - s > 0)
+                near = inv - s >= inv_near[rep]
+            else:
+                pr = p[rep]
+                z_P = pr[:, 2] + (nr[:, 0] * (a - pr[:, 0]) + nr[:, 1] * (b - pr[:, 1])) / den[rep]
+                far = z_P - s >= zf
+                near = z_P + s <= z_near[rep]
+            far &= tables.near9[t] >= zf
+            near &= (z_near[rep] > 0) & (tables.far9[t] <= z_near[rep])
+            ok[rep[~(far | near)]] = False
+    return ok
+
+
+def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS, clear: bool = True) -> np.ndarray:
     """(k,) bool: the pixels whose every view ray through the ball reads, with the bilinear
-    fetch, a depth on the pixel's own plane.
+    fetch, a depth on the pixel's own plane, or (``clear`` and ``tables`` with depth) a depth
+    that, with the plane's own along that ray, lies beyond the ball's depth range on one side
+    (:func:`_clear_of_ball`).
 
     The ball's rays (the box of :func:`ball_box`, cut into ``strips`` equal bands of b) land,
     band by band, in rectangles of pixel positions (:func:`footprint_rows`: the rays through
@@ -306,12 +407,14 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
     the image position on a plane, and bilinear interpolation reproduces it), so each
     segment's occupied part is its part behind the tangent plane and the control variate of
     :func:`ray_kernel` cancels it exactly: V = 1/2 (1 with ``normal_clamp``), what the kernel
-    returns there.
+    returns there. The rays of :func:`_clear_of_ball` add exactly 0 too.
     """
     a0, a1, b0, b1, exact = ball_box(px, radius)
     H, W = px.shape
     label = tables.labels.reshape(-1)[px.index]
-    ok = exact & (label > 0)
+    inside = exact & (label > 0)
+    plane = np.ones(len(px.index), dtype=bool)
+    rects = []
     edges = np.linspace(0.0, 1.0, int(strips) + 1)
     for s_lo, s_hi in zip(edges[:-1], edges[1:]):
         lo_b = b0 + s_lo * (b1 - b0)
@@ -325,7 +428,15 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
             y1 = np.floor(px.cy - 0.5 - px.fy * lo_b) + 1
         # inside the image only: beyond its edge ``offscreen="clamp"`` repeats the edge pixel's
         # depth (not the plane's) and ``"open"`` reads nothing
-        ok &= (x0 >= 0) & (y0 >= 0) & (x1 <= W - 1) & (y1 <= H - 1)
-        c0, c1, r0, r1 = (np.where(ok, q, 0).astype(np.intp) for q in (x0, x1, y0, y1))
-        ok &= tables.one_label(label, r0, r1, c0, c1)
+        inside &= (x0 >= 0) & (y0 >= 0) & (x1 <= W - 1) & (y1 <= H - 1)
+        c0, c1, r0, r1 = (np.where(inside, q, 0).astype(np.intp) for q in (x0, x1, y0, y1))
+        one = tables.one_label(label, r0, r1, c0, c1)
+        plane &= one
+        rects.append((c0, c1, r0, r1, one))
+    ok = inside & plane
+    if clear and tables.near9 is not None:
+        sel = np.flatnonzero(inside & ~plane)
+        if sel.size:
+            ok[sel] = _clear_of_ball(px, radius, tables, sel, [
+                None if rect[4][sel].all() else tuple(q[sel] for q in rect) for rect in rects])
     return ok

@@ -98,12 +98,13 @@ def _plane_tables(gbuffer, *, thickness, fetch):
     if thickness is not None or fetch != "bilinear":
         return None
     labels = plane_labels(gbuffer)
-    return None if labels is None else PlaneTables(labels)
+    return None if labels is None else PlaneTables(labels, gbuffer.depth)
 
 
 def _exact_pixels(gbuffer, radius, tables: PlaneTables) -> np.ndarray:
     """(H, W) bool: the pixels of :func:`vobscure.screenspace._segment.on_one_plane` (every
-    view ray through the ball reads the pixel's own plane), whose reference value is exact."""
+    view ray through the ball reads the pixel's own plane, or a depth that lies with the
+    plane's beyond the ball's depth range), whose reference value is exact."""
     flat = C.run_chunks(gbuffer, radius, lambda px: on_one_plane(px, radius, tables), np.dtype(np.float64))
     return flat == 1.0
 
