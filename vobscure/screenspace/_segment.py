@@ -313,6 +313,13 @@ CLEAR_MARGIN = 1e-6
 CLEAR_BATCH = 1 << 21
 
 
+def _box_distance(a_lo, a_hi, b_lo, b_hi, a, b):
+    """Euclidean distance from (a, b) to the boxes [a_lo, a_hi] x [b_lo, b_hi] (0 inside)."""
+    da = np.maximum(np.maximum(a_lo - a, a - a_hi), 0.0)
+    db = np.maximum(np.maximum(b_lo - b, b - b_hi), 0.0)
+    return np.hypot(da, db)
+
+
 def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
     """(len(sel),) bool for the pixels ``px.index[sel]``: whether every pixel (texel) of their
     rectangles ``rects`` (one (c0, c1, r0, r1, one) tuple of (len(sel),) arrays per strip,
@@ -338,15 +345,11 @@ def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
     n = px.n[sel]
     label = tables.labels.reshape(-1)[px.index[sel]]
     m = CLEAR_MARGIN * (np.sqrt(np.einsum("ij,ij->i", p, p)) + R)
-    z_far = p[:, 2] + R + m
-    z_near = p[:, 2] - R - m
     # minus n . p (perspective) or minus n_z (orthographic): > 0 when P faces the rays
     facing = -np.einsum("ij,ij->i", n, p) if px.perspective else -n[:, 2]
     ok = facing > 0
     den = np.where(ok, facing, 1.0)
     slack = (np.abs(n[:, 0]) / abs(px.fx) + np.abs(n[:, 1]) / abs(px.fy)) / den
-    with np.errstate(divide="ignore"):
-        inv_near = np.where(z_near > 0, 1.0 / z_near, np.inf)
     labels = tables.labels.reshape(-1)
     for rect in rects:
         if rect is None:
@@ -370,24 +373,53 @@ def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
             t = row * W + col
             other = labels[t] != label[rep]
             rep, row, col, t = rep[other], row[other], col[other], t[other]
-            # the ray through the texel's centre: (x / z, y / z), or view (x, y)
-            a = (col + 0.5 - px.cx) / px.fx
-            b = (px.cy - (row + 0.5)) / px.fy
+            # the rays landing within one pixel of the texel: a box of directions (a, b)
+            # (x / z, y / z), or of view (x, y) orthographically
+            a_lo, a_hi = np.sort([(col - 0.5 - px.cx) / px.fx, (col + 1.5 - px.cx) / px.fx], axis=0)
+            b_lo, b_hi = np.sort([(px.cy - row - 1.5) / px.fy, (px.cy - row + 0.5) / px.fy], axis=0)
+            a = 0.5 * (a_lo + a_hi)
+            b = 0.5 * (b_lo + b_hi)
+            pr = p[rep]
             nr = n[rep]
             s = slack[rep]
-            zf = z_far[rep]
+            RR = R * R
+            pp = np.einsum("ij,ij->i", pr, pr)
+            if px.perspective:
+                # D, the distance from p to a ray's line, is at least p_z |(a, b) - (a_p, b_p)| / |u|
+                # (the offset within the plane z = p_z, foreshortened at most by 1 / |u|)
+                gap = _box_distance(a_lo, a_hi, b_lo, b_hi, pr[:, 0] / pr[:, 2], pr[:, 1] / pr[:, 2])
+                uu_lo = 1.0 + _box_distance(a_lo, a_hi, b_lo, b_hi, 0.0, 0.0) ** 2
+                uu_hi = 1.0 + np.maximum(np.abs(a_lo), np.abs(a_hi)) ** 2 + np.maximum(np.abs(b_lo), np.abs(b_hi)) ** 2
+                D2 = (pr[:, 2] * gap) ** 2 / uu_hi
+                # the chord's ends along the ray at angle theta from p are at view depth
+                # (|p| cos theta -+ sqrt(R^2 - |p|^2 sin^2 theta)) / |u|, the far end
+                # decreasing and the near end increasing in theta (|p| > R)
+                along = np.sqrt(np.maximum(pp - D2, 0.0))
+                half = np.sqrt(np.maximum(RR - D2, 0.0))
+                end_far = (along + half) / np.sqrt(uu_lo)
+                end_near = (along - half) / np.sqrt(uu_hi)
+            else:
+                D2 = _box_distance(a_lo, a_hi, b_lo, b_hi, pr[:, 0], pr[:, 1]) ** 2
+                half = np.sqrt(np.maximum(RR - D2, 0.0))
+                end_far = pr[:, 2] + half
+                end_near = pr[:, 2] - half
+            # rays that miss the ball by far more than the kernel's rounding of h^2 add 0
+            meets = D2 <= RR + 1e-8 * pp
+            rep, t, a, b, pr, nr, s = rep[meets], t[meets], a[meets], b[meets], pr[meets], nr[meets], s[meets]
+            zf = end_far[meets] + m[rep]
+            zn = end_near[meets] - m[rep]
             if px.perspective:
                 # 1 / z_P = (n . u) / (n . p), u = (a, b, 1) (Loos & Sloan 2010, Sec. 4.4)
                 inv = -(a * nr[:, 0] + b * nr[:, 1] + nr[:, 2]) / den[rep]
                 far = (inv + s <= 1.0 / zf) & (inv - s > 0)
-                near = inv - s >= inv_near[rep]
+                with np.errstate(divide="ignore"):
+                    near = (zn > 0) & (inv - s >= 1.0 / zn)
             else:
-                pr = p[rep]
                 z_P = pr[:, 2] + (nr[:, 0] * (a - pr[:, 0]) + nr[:, 1] * (b - pr[:, 1])) / den[rep]
                 far = z_P - s >= zf
-                near = z_P + s <= z_near[rep]
+                near = (zn > 0) & (z_P + s <= zn)
             far &= tables.near9[t] >= zf
-            near &= (z_near[rep] > 0) & (tables.far9[t] <= z_near[rep])
+            near &= tables.far9[t] <= zn
             ok[rep[~(far | near)]] = False
     return ok
 
