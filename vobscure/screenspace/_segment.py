@@ -221,25 +221,41 @@ def _summed(a: np.ndarray) -> np.ndarray:
     return S
 
 
+def _pyramid(a: np.ndarray, reduce, fill) -> list[np.ndarray]:
+    """[a, then ``reduce`` over 2 x 2 blocks of the level below (odd sizes padded with
+    ``fill``), ...] down to one element: level l, element (i, j) covers the pixels of rows
+    i 2^l .. (i + 1) 2^l - 1 and the same columns."""
+    out = [a]
+    while a.shape[0] > 1 or a.shape[1] > 1:
+        H, W = a.shape
+        b = np.full((H + H % 2, W + W % 2), fill)
+        b[:H, :W] = a
+        a = reduce(reduce(b[0::2, 0::2], b[0::2, 1::2]), reduce(b[1::2, 0::2], b[1::2, 1::2]))
+        out.append(a)
+    return out
+
+
 class PlaneTables:
     """Summed-area tables of :func:`plane_labels` and of their squares, built once per image:
     a rectangle holds one label L when its sum is L n and its sum of squares L^2 n (zero
     variance; exact in int64). With ``depth`` ((H, W), +inf on background) also the least and
     greatest depth of each pixel's 3 x 3 neighbourhood (``near9``, ``far9``: every bilinear
-    cell with the pixel as a corner reads between them), for :func:`on_one_plane`'s test of
-    the other surfaces in a footprint."""
+    cell with the pixel as a corner reads between them) and their min / max pyramids
+    (:func:`_pyramid`), for :func:`on_one_plane`'s test of the other surfaces in a footprint."""
 
     def __init__(self, labels: np.ndarray, depth: np.ndarray | None = None):
         self.labels = labels
         self.S1 = _summed(labels)
         self.S2 = _summed(labels * labels)
-        self.near9 = self.far9 = None
+        self.near9 = self.far9 = self.near_pyramid = self.far_pyramid = None
         if depth is not None:
             from scipy import ndimage
             d = np.asarray(depth, dtype=np.float64)
             d = np.where(np.isnan(d), np.inf, d)
-            self.near9 = ndimage.minimum_filter(d, size=3, mode="nearest").reshape(-1)
-            self.far9 = ndimage.maximum_filter(d, size=3, mode="nearest").reshape(-1)
+            self.near9 = ndimage.minimum_filter(d, size=3, mode="nearest")
+            self.far9 = ndimage.maximum_filter(d, size=3, mode="nearest")
+            self.near_pyramid = _pyramid(self.near9, np.minimum, np.inf)
+            self.far_pyramid = _pyramid(self.far9, np.maximum, -np.inf)
 
     def one_label(self, label, r0, r1, c0, c1) -> np.ndarray:
         """Whether every pixel of rows r0..r1, columns c0..c1 (inclusive) has ``label`` > 0."""
@@ -309,8 +325,9 @@ def footprint_rows(px, radius, b_lo, b_hi, a0, a1):
 #: the bilinear depth and the plane's depth along a ray (a few ulps), far below any scene's
 #: detail. It moves the thresholds toward "not exact".
 CLEAR_MARGIN = 1e-6
-#: Texels enumerated at once by :func:`_clear_of_ball` (memory: a few arrays of this length).
-CLEAR_BATCH = 1 << 21
+#: Texels a side of the grid that :func:`_clear_of_ball` tests in each of a pixel's first boxes
+#: before its quadtree (a shortcut to the verdict of the many pixels that fail).
+CLEAR_PROBES = 2
 
 
 def _box_distance(a_lo, a_hi, b_lo, b_hi, a, b):
@@ -323,105 +340,162 @@ def _box_distance(a_lo, a_hi, b_lo, b_hi, a, b):
 def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
     """(len(sel),) bool for the pixels ``px.index[sel]``: whether every pixel (texel) of their
     rectangles ``rects`` (one (c0, c1, r0, r1, one) tuple of (len(sel),) arrays per strip,
-    ``one`` where the rectangle holds the pixel's label only; None entries skip a strip) whose label is not the pixel's own lies, with its 3 x 3 neighbourhood,
-    entirely behind the ball's depth range [p_z - R, p_z + R], and the pixel's plane P lies
-    behind it too over the texel's bilinear cells; or both entirely in front of it.
+    ``one`` where the rectangle holds the pixel's label only; None: no strip to check) whose
+    label is not the pixel's own is clear of the ball: every ray landing within one pixel of it
+    (the rays of the bilinear cells it is a corner of) either misses the ball, or reads a depth
+    d and meets the pixel's plane P at a depth z_P both behind the ray's chord through the
+    ball, or both in front of it.
 
-    Every view ray through the ball lies in that depth range (view depth is the ray's
-    parameter), so a ray whose fetched depth d and whose depth z_P on P are both beyond it
-    clips its occupied part and its part behind the tangent plane to the same end of the
-    segment (both empty behind, both the whole segment in front): its term in the control
-    variate's difference is exactly 0, as on P itself. Cells not entirely labelled P have a
-    corner that is not P; their rays land within one pixel of it, where 1/z_P (z_P under an
-    orthographic camera) is affine in the image position, bounded by its value at the texel
-    plus the gradient's reach over one pixel each way; the bilinear depth lies between the
-    corners' (``near9``, ``far9``). P's rays must meet it from its front (n . p < 0 and
-    n . u < 0 along them): the half-ball and the control variate then take the segment's
-    same side as on P.
+    Such a ray's occupied part and its part behind P (the tangent plane) clip to the same end
+    of the chord (both empty behind, both the whole chord in front): its term in the control
+    variate's difference is exactly 0, as on P itself (and with ``normal_clamp`` the half-ball's
+    part of it is empty behind, the whole chord's empty part in front). The bounds, for a box of
+    texels and the rays within one pixel of it:
+
+    - d lies between the least and greatest depth of the texels' 3 x 3 neighbourhoods (the
+      corners of every cell those rays read; ``PlaneTables`` keeps a min / max pyramid);
+    - 1/z_P (z_P under an orthographic camera) is affine in the image position: its value at
+      the box's centre plus the gradient's reach to the box's corners; P must face the rays
+      (n . p < 0 and n . u < 0 along them) so that the chord is split as on P;
+    - the chord's far end along a ray at angle theta from the centre p is at view depth
+      (|p| cos theta + sqrt(R^2 - |p|^2 sin^2 theta)) / |u|, decreasing in theta, its near
+      end with the minus sign, increasing (|p| > R); the distance D = |p| sin theta from p to
+      the ray is at least p_z |(a, b) - (a_p, b_p)| / |u| (the offset in the plane z = p_z,
+      foreshortened at most by 1 / |u|); orthographically the chord is
+      p_z -+ sqrt(R^2 - D^2) with D the distance from (p_x, p_y) to the box;
+    - every bound moves by :data:`CLEAR_MARGIN` toward "not clear".
+
+    The texels are checked as a quadtree of boxes aligned with the pyramid: a box whose
+    texels all carry P's label, or whose bounds pass, is done; another is split down to
+    single texels, where a failure fails the pixel.
     """
     R = float(radius)
-    H, W = px.shape
+    RR = R * R
     p = px.p[sel]
     n = px.n[sel]
     label = tables.labels.reshape(-1)[px.index[sel]]
-    m = CLEAR_MARGIN * (np.sqrt(np.einsum("ij,ij->i", p, p)) + R)
+    pp = np.einsum("ij,ij->i", p, p)
+    m = CLEAR_MARGIN * (np.sqrt(pp) + R)
     # minus n . p (perspective) or minus n_z (orthographic): > 0 when P faces the rays
     facing = -np.einsum("ij,ij->i", n, p) if px.perspective else -n[:, 2]
     ok = facing > 0
     den = np.where(ok, facing, 1.0)
-    slack = (np.abs(n[:, 0]) / abs(px.fx) + np.abs(n[:, 1]) / abs(px.fy)) / den
+    gx = np.abs(n[:, 0]) / abs(px.fx) / den
+    gy = np.abs(n[:, 1]) / abs(px.fy) / den
+    top = len(tables.near_pyramid) - 1
     labels = tables.labels.reshape(-1)
+    W = px.shape[1]
+    parts = []
     for rect in rects:
         if rect is None:
             continue
         c0, c1, r0, r1, one = rect
-        w = c1 - c0 + 1
-        area = np.where(ok & ~one, w * (r1 - r0 + 1), 0)
-        ends = np.cumsum(area)
-        first = 0
-        while first < len(area):
-            last = max(first + 1, int(np.searchsorted(ends, ends[first] - area[first] + CLEAR_BATCH, "right")))
-            q = np.arange(first, min(last, len(area)))
-            first = q[-1] + 1
-            cnt = area[q]
-            if not cnt.any():
-                continue
-            rep = np.repeat(q, cnt)
-            off = np.arange(len(rep)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-            row = r0[rep] + off // w[rep]
-            col = c0[rep] + off % w[rep]
-            t = row * W + col
-            other = labels[t] != label[rep]
-            rep, row, col, t = rep[other], row[other], col[other], t[other]
-            # the rays landing within one pixel of the texel: a box of directions (a, b)
-            # (x / z, y / z), or of view (x, y) orthographically
-            a_lo, a_hi = np.sort([(col - 0.5 - px.cx) / px.fx, (col + 1.5 - px.cx) / px.fx], axis=0)
-            b_lo, b_hi = np.sort([(px.cy - row - 1.5) / px.fy, (px.cy - row + 0.5) / px.fy], axis=0)
-            a = 0.5 * (a_lo + a_hi)
-            b = 0.5 * (b_lo + b_hi)
-            pr = p[rep]
-            nr = n[rep]
-            s = slack[rep]
-            RR = R * R
-            pp = np.einsum("ij,ij->i", pr, pr)
-            if px.perspective:
-                # D, the distance from p to a ray's line, is at least p_z |(a, b) - (a_p, b_p)| / |u|
-                # (the offset within the plane z = p_z, foreshortened at most by 1 / |u|)
-                gap = _box_distance(a_lo, a_hi, b_lo, b_hi, pr[:, 0] / pr[:, 2], pr[:, 1] / pr[:, 2])
-                uu_lo = 1.0 + _box_distance(a_lo, a_hi, b_lo, b_hi, 0.0, 0.0) ** 2
-                uu_hi = 1.0 + np.maximum(np.abs(a_lo), np.abs(a_hi)) ** 2 + np.maximum(np.abs(b_lo), np.abs(b_hi)) ** 2
-                D2 = (pr[:, 2] * gap) ** 2 / uu_hi
-                # the chord's ends along the ray at angle theta from p are at view depth
-                # (|p| cos theta -+ sqrt(R^2 - |p|^2 sin^2 theta)) / |u|, the far end
-                # decreasing and the near end increasing in theta (|p| > R)
-                along = np.sqrt(np.maximum(pp - D2, 0.0))
-                half = np.sqrt(np.maximum(RR - D2, 0.0))
-                end_far = (along + half) / np.sqrt(uu_lo)
-                end_near = (along - half) / np.sqrt(uu_hi)
-            else:
-                D2 = _box_distance(a_lo, a_hi, b_lo, b_hi, pr[:, 0], pr[:, 1]) ** 2
-                half = np.sqrt(np.maximum(RR - D2, 0.0))
-                end_far = pr[:, 2] + half
-                end_near = pr[:, 2] - half
-            # rays that miss the ball by far more than the kernel's rounding of h^2 add 0
-            meets = D2 <= RR + 1e-8 * pp
-            rep, t, a, b, pr, nr, s = rep[meets], t[meets], a[meets], b[meets], pr[meets], nr[meets], s[meets]
-            zf = end_far[meets] + m[rep]
-            zn = end_near[meets] - m[rep]
-            if px.perspective:
-                # 1 / z_P = (n . u) / (n . p), u = (a, b, 1) (Loos & Sloan 2010, Sec. 4.4)
-                inv = -(a * nr[:, 0] + b * nr[:, 1] + nr[:, 2]) / den[rep]
-                far = (inv + s <= 1.0 / zf) & (inv - s > 0)
-                with np.errstate(divide="ignore"):
-                    near = (zn > 0) & (inv - s >= 1.0 / zn)
-            else:
-                z_P = pr[:, 2] + (nr[:, 0] * (a - pr[:, 0]) + nr[:, 1] * (b - pr[:, 1])) / den[rep]
-                far = z_P - s >= zf
-                near = (zn > 0) & (z_P + s <= zn)
-            far &= tables.near9[t] >= zf
-            near &= tables.far9[t] <= zn
-            ok[rep[~(far | near)]] = False
+        q = np.flatnonzero(ok & ~one)
+        if not q.size:
+            continue
+        c0, c1, r0, r1 = c0[q], c1[q], r0[q], r1[q]
+        span = np.maximum(c1 - c0, r1 - r0) + 1
+        # about 4 boxes a side to start with
+        lev = np.minimum(np.ceil(np.log2(np.maximum(span / 4.0, 1.0))).astype(np.intp), top)
+        bi0, bi1, bj0, bj1 = r0 >> lev, r1 >> lev, c0 >> lev, c1 >> lev
+        nj = bj1 - bj0 + 1
+        cnt = (bi1 - bi0 + 1) * nj
+        k = np.repeat(np.arange(len(q)), cnt)
+        off = np.arange(len(k)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        parts.append((q[k], lev[k], bi0[k] + off // nj[k], bj0[k] + off % nj[k], r0[k], r1[k], c0[k], c1[k]))
+    if not parts:
+        return ok
+    pix, lev, bi, bj, r0, r1, c0, c1 = (np.concatenate(a) for a in zip(*parts))
+    # Most pixels fail on many texels: a grid of CLEAR_PROBES^2 texels of each box, tested
+    # first, rules them out before the quadtree descends (a failed texel fails its pixel)
+    g = (np.arange(CLEAR_PROBES) + 0.5) / CLEAR_PROBES
+    i_lo = np.maximum(bi << lev, r0)
+    i_hi = np.minimum(((bi + 1) << lev) - 1, r1)
+    j_lo = np.maximum(bj << lev, c0)
+    j_hi = np.minimum(((bj + 1) << lev) - 1, c1)
+    for fi in g:
+        for fj in g:
+            ti = (i_lo + fi * (i_hi - i_lo + 1)).astype(np.intp)
+            tj = (j_lo + fj * (j_hi - j_lo + 1)).astype(np.intp)
+            test = ok[pix] & (labels[ti * W + tj] != label[pix])
+            q = pix[test]
+            ti, tj = ti[test], tj[test]
+            fine = _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, ti, ti, tj, tj,
+                              tables.near9[ti, tj], tables.far9[ti, tj])
+            ok[q[~fine]] = False
+    while len(pix):
+        keep = ok[pix]
+        pix, lev, bi, bj, r0, r1, c0, c1 = (a[keep] for a in (pix, lev, bi, bj, r0, r1, c0, c1))
+        if not len(pix):
+            break
+        # the box's texels within the rectangle
+        i_lo = np.maximum(bi << lev, r0)
+        i_hi = np.minimum(((bi + 1) << lev) - 1, r1)
+        j_lo = np.maximum(bj << lev, c0)
+        j_hi = np.minimum(((bj + 1) << lev) - 1, c1)
+        done = tables.one_label(label[pix], i_lo, i_hi, j_lo, j_hi)
+        near9 = np.empty(len(pix))
+        far9 = np.empty(len(pix))
+        for lv in np.unique(lev):
+            at = lev == lv
+            near9[at] = tables.near_pyramid[lv][bi[at], bj[at]]
+            far9[at] = tables.far_pyramid[lv][bi[at], bj[at]]
+        done |= _box_clear(px, p[pix], n[pix], pp[pix], den[pix], gx[pix], gy[pix], m[pix], RR,
+                           i_lo, i_hi, j_lo, j_hi, near9, far9)
+        ok[pix[~done & (lev == 0)]] = False
+        split = ~done & (lev > 0)
+        pix, lev, bi, bj, r0, r1, c0, c1 = (a[split] for a in (pix, lev, bi, bj, r0, r1, c0, c1))
+        lev = lev - 1
+        kids = []
+        for di in (0, 1):
+            for dj in (0, 1):
+                ci, cj = 2 * bi + di, 2 * bj + dj
+                meet = ((ci << lev) <= r1) & (((ci + 1) << lev) - 1 >= r0) & \
+                       ((cj << lev) <= c1) & (((cj + 1) << lev) - 1 >= c0)
+                kids.append((pix[meet], lev[meet], ci[meet], cj[meet], r0[meet], r1[meet], c0[meet], c1[meet]))
+        pix, lev, bi, bj, r0, r1, c0, c1 = (np.concatenate(a) for a in zip(*kids))
     return ok
+
+
+def _box_clear(px, p, n, pp, den, gx, gy, m, RR, i_lo, i_hi, j_lo, j_hi, near9, far9):
+    """Whether every ray within one pixel of the texels i_lo..i_hi, j_lo..j_hi misses the ball
+    or has its depth (between ``near9`` and ``far9``) and its plane's depth on one side of its
+    chord (:func:`_clear_of_ball`; one row per box and its pixel)."""
+    # the rays' positions: from half a pixel before the first texel's centre minus one pixel to
+    # the last one's plus one; as a box of directions (a, b) = (x / z, y / z), or of view (x, y)
+    a_lo, a_hi = (j_lo - 0.5 - px.cx) / px.fx, (j_hi + 1.5 - px.cx) / px.fx
+    a_lo, a_hi = np.minimum(a_lo, a_hi), np.maximum(a_lo, a_hi)
+    b_lo, b_hi = (px.cy - i_hi - 1.5) / px.fy, (px.cy - i_lo + 0.5) / px.fy
+    b_lo, b_hi = np.minimum(b_lo, b_hi), np.maximum(b_lo, b_hi)
+    a = 0.5 * (a_lo + a_hi)
+    b = 0.5 * (b_lo + b_hi)
+    # the plane's reach from the centre to the box's corners, in pixels times the gradient
+    s = (0.5 * (j_hi - j_lo) + 1.0) * gx + (0.5 * (i_hi - i_lo) + 1.0) * gy
+    if px.perspective:
+        gap = _box_distance(a_lo, a_hi, b_lo, b_hi, p[:, 0] / p[:, 2], p[:, 1] / p[:, 2])
+        uu_lo = 1.0 + _box_distance(a_lo, a_hi, b_lo, b_hi, 0.0, 0.0) ** 2
+        uu_hi = 1.0 + np.maximum(np.abs(a_lo), np.abs(a_hi)) ** 2 + np.maximum(np.abs(b_lo), np.abs(b_hi)) ** 2
+        D2 = (p[:, 2] * gap) ** 2 / uu_hi
+        along = np.sqrt(np.maximum(pp - D2, 0.0))
+        half = np.sqrt(np.maximum(RR - D2, 0.0))
+        z_far = (along + half) / np.sqrt(uu_lo) + m
+        z_near = (along - half) / np.sqrt(uu_hi) - m
+        # 1 / z_P = (n . u) / (n . p), u = (a, b, 1) (Loos & Sloan 2010, Sec. 4.4)
+        inv = -(a * n[:, 0] + b * n[:, 1] + n[:, 2]) / den
+        far = (inv + s <= 1.0 / z_far) & (inv - s > 0)
+        with np.errstate(divide="ignore"):
+            near = (z_near > 0) & (inv - s >= 1.0 / z_near)
+    else:
+        D2 = _box_distance(a_lo, a_hi, b_lo, b_hi, p[:, 0], p[:, 1]) ** 2
+        half = np.sqrt(np.maximum(RR - D2, 0.0))
+        z_far = p[:, 2] + half + m
+        z_near = p[:, 2] - half - m
+        z_P = p[:, 2] + (n[:, 0] * (a - p[:, 0]) + n[:, 1] * (b - p[:, 1])) / den
+        far = z_P - s >= z_far
+        near = (z_near > 0) & (z_P + s <= z_near)
+    # rays that miss the ball by far more than the kernel's rounding of h^2 add 0
+    misses = D2 > RR + 1e-8 * pp
+    return misses | (far & (near9 >= z_far)) | (near & (far9 <= z_near))
 
 
 def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS, clear: bool = True) -> np.ndarray:
