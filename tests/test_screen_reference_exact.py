@@ -22,18 +22,24 @@ from conftest import FALSE_FAILURE, t_threshold
 RADIUS = 0.3
 #: Rays of the segment path and points of the independent point sampling.
 SEGMENTS, POINTS = 128, 4096
+OBSTACLES = ["wall", "cube", "ledge"]
 #: Calls of the t-test in this module (Bonferroni with the pixels).
-CALLS = 4
+CALLS = 2 * len(OBSTACLES) + 2
 
 
 def _floor_scene(obstacle: str):
     """A floor (the top of a slab, y = 0) with a wall far behind ("wall": the box's face at
-    z = -2 faces the camera, 1.5 behind the nearest floor pixels' balls) or a cube standing on
-    it ("cube": its faces reach some balls and hide others from the camera)."""
+    z = -2 faces the camera, 1.5 behind the nearest floor pixels' balls), a cube standing on
+    it ("cube": its faces reach some balls and hide others from the camera), or a ledge
+    ("ledge": the floor ends at z = -1 above a lower floor at y = -3, which the rays past the
+    edge read far behind the balls, where the floor's plane would still cross them)."""
     import trimesh
-    slab = trimesh.creation.box(extents=(8.0, 1.0, 8.0))
-    slab.apply_translation((0.0, -0.5, 0.0))
-    if obstacle == "wall":
+    slab = trimesh.creation.box(extents=(8.0, 1.0, 8.0 if obstacle != "ledge" else 3.0))
+    slab.apply_translation((0.0, -0.5, 0.0 if obstacle != "ledge" else 0.5))
+    if obstacle == "ledge":
+        other = trimesh.creation.box(extents=(8.0, 1.0, 8.0))
+        other.apply_translation((0.0, -3.5, -3.0))
+    elif obstacle == "wall":
         other = trimesh.creation.box(extents=(8.0, 3.0, 0.2))
         other.apply_translation((0.0, 1.5, -2.1))
     else:
@@ -44,7 +50,7 @@ def _floor_scene(obstacle: str):
 
 def _view(obstacle: str, ortho: bool, size=(64, 48)):
     scene = _floor_scene(obstacle)
-    if obstacle == "wall":
+    if obstacle in ("wall", "ledge"):
         eye, target = (0.0, 1.2, 1.5), (0.0, 0.0, -1.5)
     else:
         eye, target = (0.0, 2.5, 2.5), (0.0, 0.0, 0.0)
@@ -73,7 +79,7 @@ def _args(**kw):
 
 
 @pytest.mark.parametrize("ortho", [False, True])
-@pytest.mark.parametrize("obstacle", ["wall", "cube"])
+@pytest.mark.parametrize("obstacle", OBSTACLES)
 def test_more_pixels_are_exact(obstacle, ortho):
     """The extended test keeps every plane-only pixel and adds pixels whose footprint reads the
     other surface."""
@@ -87,7 +93,7 @@ def test_more_pixels_are_exact(obstacle, ortho):
                                   dict(falloff="quadratic", normal_clamp=True), dict(offscreen="open")],
                          ids=lambda c: ",".join(f"{k}={v}" for k, v in c.items()) or "default")
 @pytest.mark.parametrize("ortho", [False, True])
-@pytest.mark.parametrize("obstacle", ["wall", "cube"])
+@pytest.mark.parametrize("obstacle", OBSTACLES)
 def test_new_exact_pixels_read_the_closed_form_in_every_group(obstacle, ortho, case, monkeypatch):
     """With no plane tables at all (no shortcut, no exact pixels) the segment kernel integrates
     every ray of the newly exact pixels: every group reads 1/2 (1 clamped) there bit for bit
@@ -114,7 +120,7 @@ def test_new_exact_pixels_read_the_closed_form_in_every_group(obstacle, ortho, c
 
 
 @pytest.mark.parametrize("ortho", [False, True])
-@pytest.mark.parametrize("obstacle", ["wall", "cube"])
+@pytest.mark.parametrize("obstacle", OBSTACLES)
 def test_new_exact_pixels_agree_with_point_sampling(obstacle, ortho):
     """The independent point sampling of the ball (each point's occupancy on its own) agrees with
     the closed form on every newly exact pixel (t-test with its reported stderr, Bonferroni over
