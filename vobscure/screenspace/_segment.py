@@ -325,8 +325,9 @@ def footprint_rows(px, radius, b_lo, b_hi, a0, a1):
 #: the bilinear depth and the plane's depth along a ray (a few ulps), far below any scene's
 #: detail. It moves the thresholds toward "not exact".
 CLEAR_MARGIN = 1e-6
-#: Texels a side of the grid that :func:`_clear_of_ball` tests in each of a pixel's first boxes
-#: before its quadtree (a shortcut to the verdict of the many pixels that fail).
+#: Texels a side of the grid that :func:`_clear_of_ball` tests in each of a pixel's rectangles,
+#: then in each of its first boxes, before its quadtree: most pixels fail on many texels, and
+#: a texel that fails fails its pixel (a shortcut to the verdict of the many that fail).
 CLEAR_PROBES = 2
 
 
@@ -385,11 +386,20 @@ def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
     top = len(tables.near_pyramid) - 1
     labels = tables.labels.reshape(-1)
     W = px.shape[1]
+    rects = [r for r in rects if r is not None]
+    g = (np.arange(CLEAR_PROBES) + 0.5) / CLEAR_PROBES
+    for c0, c1, r0, r1, one in rects:
+        for fi in g:
+            for fj in g:
+                ti = (r0 + fi * (r1 - r0 + 1)).astype(np.intp)
+                tj = (c0 + fj * (c1 - c0 + 1)).astype(np.intp)
+                q = np.flatnonzero(ok & ~one & (labels[ti * W + tj] != label))
+                ti, tj = ti[q], tj[q]
+                fine = _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, ti, ti, tj, tj,
+                                  tables.near9[ti, tj], tables.far9[ti, tj])
+                ok[q[~fine]] = False
     parts = []
-    for rect in rects:
-        if rect is None:
-            continue
-        c0, c1, r0, r1, one = rect
+    for c0, c1, r0, r1, one in rects:
         q = np.flatnonzero(ok & ~one)
         if not q.size:
             continue
@@ -406,9 +416,7 @@ def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
     if not parts:
         return ok
     pix, lev, bi, bj, r0, r1, c0, c1 = (np.concatenate(a) for a in zip(*parts))
-    # Most pixels fail on many texels: a grid of CLEAR_PROBES^2 texels of each box, tested
-    # first, rules them out before the quadtree descends (a failed texel fails its pixel)
-    g = (np.arange(CLEAR_PROBES) + 0.5) / CLEAR_PROBES
+    # and again in each first box, before the quadtree descends
     i_lo = np.maximum(bi << lev, r0)
     i_hi = np.minimum(((bi + 1) << lev) - 1, r1)
     j_lo = np.maximum(bj << lev, c0)
@@ -454,6 +462,14 @@ def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
                        ((cj << lev) <= c1) & (((cj + 1) << lev) - 1 >= c0)
                 kids.append((pix[meet], lev[meet], ci[meet], cj[meet], r0[meet], r1[meet], c0[meet], c1[meet]))
         pix, lev, bi, bj, r0, r1, c0, c1 = (np.concatenate(a) for a in zip(*kids))
+        # each child's middle texel: a failure there ends its pixel before the next level
+        ti = (np.maximum(bi << lev, r0) + np.minimum(((bi + 1) << lev) - 1, r1)) // 2
+        tj = (np.maximum(bj << lev, c0) + np.minimum(((bj + 1) << lev) - 1, c1)) // 2
+        test = np.flatnonzero((lev > 0) & (labels[ti * W + tj] != label[pix]))
+        q, ti, tj = pix[test], ti[test], tj[test]
+        fine = _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, ti, ti, tj, tj,
+                          tables.near9[ti, tj], tables.far9[ti, tj])
+        ok[q[~fine]] = False
     return ok
 
 
