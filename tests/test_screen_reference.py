@@ -310,7 +310,7 @@ def test_exact_pixels_report_stderr_zero(normal_clamp):
     e = vo.vo_reference(gb, radius=R, samples=SEGMENTS, normal_clamp=normal_clamp, seed=4)
     px = Cm.prepare(gb, R)
     flat = np.zeros(gb.depth.size, dtype=bool)
-    flat[px.index] = S.on_one_plane(px, R, S.PlaneTables(S.plane_labels(gb)))
+    flat[px.index] = S.on_one_plane(px, R, S.PlaneTables(S.plane_labels(gb), gb.depth))
     flat = flat.reshape(gb.shape)
     assert flat.sum() > 100
     assert np.all(e.stderr[flat] == 0) and np.all(e.value[flat] == (1.0 if normal_clamp else 0.5))

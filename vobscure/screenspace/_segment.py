@@ -221,15 +221,41 @@ def _summed(a: np.ndarray) -> np.ndarray:
     return S
 
 
+def _pyramid(a: np.ndarray, reduce, fill) -> list[np.ndarray]:
+    """[a, then ``reduce`` over 2 x 2 blocks of the level below (odd sizes padded with
+    ``fill``), ...] down to one element: level l, element (i, j) covers the pixels of rows
+    i 2^l .. (i + 1) 2^l - 1 and the same columns."""
+    out = [a]
+    while a.shape[0] > 1 or a.shape[1] > 1:
+        H, W = a.shape
+        b = np.full((H + H % 2, W + W % 2), fill)
+        b[:H, :W] = a
+        a = reduce(reduce(b[0::2, 0::2], b[0::2, 1::2]), reduce(b[1::2, 0::2], b[1::2, 1::2]))
+        out.append(a)
+    return out
+
+
 class PlaneTables:
     """Summed-area tables of :func:`plane_labels` and of their squares, built once per image:
     a rectangle holds one label L when its sum is L n and its sum of squares L^2 n (zero
-    variance; exact in int64)."""
+    variance; exact in int64). With ``depth`` ((H, W), +inf on background) also the least and
+    greatest depth of each pixel's 3 x 3 neighbourhood (``near9``, ``far9``: every bilinear
+    cell with the pixel as a corner reads between them) and their min / max pyramids
+    (:func:`_pyramid`), for :func:`on_one_plane`'s test of the other surfaces in a footprint."""
 
-    def __init__(self, labels: np.ndarray):
+    def __init__(self, labels: np.ndarray, depth: np.ndarray | None = None):
         self.labels = labels
         self.S1 = _summed(labels)
         self.S2 = _summed(labels * labels)
+        self.near9 = self.far9 = self.near_pyramid = self.far_pyramid = None
+        if depth is not None:
+            from scipy import ndimage
+            d = np.asarray(depth, dtype=np.float64)
+            d = np.where(np.isnan(d), np.inf, d)
+            self.near9 = ndimage.minimum_filter(d, size=3, mode="nearest")
+            self.far9 = ndimage.maximum_filter(d, size=3, mode="nearest")
+            self.near_pyramid = _pyramid(self.near9, np.minimum, np.inf)
+            self.far_pyramid = _pyramid(self.far9, np.maximum, -np.inf)
 
     def one_label(self, label, r0, r1, c0, c1) -> np.ndarray:
         """Whether every pixel of rows r0..r1, columns c0..c1 (inclusive) has ``label`` > 0."""
@@ -293,9 +319,206 @@ def footprint_rows(px, radius, b_lo, b_hi, a0, a1):
     return np.maximum(lo, a0), np.minimum(hi, a1)
 
 
-def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS) -> np.ndarray:
+#: Margin of :func:`on_one_plane`'s depth tests of other surfaces, relative to |p| + R: far
+#: above the rounding of the kernel's chord ends (z_m +- h; h a square root, 1e-8 relative
+#: near the ball's rim, where the chord's end lies well inside the ball's depth range) and of
+#: the bilinear depth and the plane's depth along a ray (a few ulps), far below any scene's
+#: detail. It moves the thresholds toward "not exact".
+CLEAR_MARGIN = 1e-6
+#: Texels a side of the grid that :func:`_clear_of_ball` tests in each of a pixel's rectangles,
+#: then in each of its first boxes, before its quadtree: most pixels fail on many texels, and
+#: a texel that fails fails its pixel (a shortcut to the verdict of the many that fail).
+CLEAR_PROBES = 2
+
+
+def _box_distance(a_lo, a_hi, b_lo, b_hi, a, b):
+    """Euclidean distance from (a, b) to the boxes [a_lo, a_hi] x [b_lo, b_hi] (0 inside)."""
+    da = np.maximum(np.maximum(a_lo - a, a - a_hi), 0.0)
+    db = np.maximum(np.maximum(b_lo - b, b - b_hi), 0.0)
+    return np.hypot(da, db)
+
+
+def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects):
+    """(len(sel),) bool for the pixels ``px.index[sel]``: whether every pixel (texel) of their
+    rectangles ``rects`` (one (c0, c1, r0, r1, one) tuple of (len(sel),) arrays per strip,
+    ``one`` where the rectangle holds the pixel's label only; None: no strip to check) whose
+    label is not the pixel's own is clear of the ball: every ray landing within one pixel of it
+    (the rays of the bilinear cells it is a corner of) either misses the ball, or reads a depth
+    d and meets the pixel's plane P at a depth z_P both behind the ray's chord through the
+    ball, or both in front of it.
+
+    Such a ray's occupied part and its part behind P (the tangent plane) clip to the same end
+    of the chord (both empty behind, both the whole chord in front): its term in the control
+    variate's difference is exactly 0, as on P itself (and with ``normal_clamp`` the half-ball's
+    part of it is empty behind, the whole chord's empty part in front). The bounds, for a box of
+    texels and the rays within one pixel of it:
+
+    - d lies between the least and greatest depth of the texels' 3 x 3 neighbourhoods (the
+      corners of every cell those rays read; ``PlaneTables`` keeps a min / max pyramid);
+    - 1/z_P (z_P under an orthographic camera) is affine in the image position: its value at
+      the box's centre plus the gradient's reach to the box's corners; P must face the rays
+      (n . p < 0 and n . u < 0 along them) so that the chord is split as on P;
+    - the chord's far end along a ray at angle theta from the centre p is at view depth
+      (|p| cos theta + sqrt(R^2 - |p|^2 sin^2 theta)) / |u|, decreasing in theta, its near
+      end with the minus sign, increasing (|p| > R); the distance D = |p| sin theta from p to
+      the ray is at least p_z |(a, b) - (a_p, b_p)| / |u| (the offset in the plane z = p_z,
+      foreshortened at most by 1 / |u|); orthographically the chord is
+      p_z -+ sqrt(R^2 - D^2) with D the distance from (p_x, p_y) to the box;
+    - every bound moves by :data:`CLEAR_MARGIN` toward "not clear".
+
+    The texels are checked as a quadtree of boxes aligned with the pyramid: a box whose
+    texels all carry P's label, or whose bounds pass, is done; another is split down to
+    single texels, where a failure fails the pixel.
+    """
+    R = float(radius)
+    RR = R * R
+    p = px.p[sel]
+    n = px.n[sel]
+    label = tables.labels.reshape(-1)[px.index[sel]]
+    pp = np.einsum("ij,ij->i", p, p)
+    m = CLEAR_MARGIN * (np.sqrt(pp) + R)
+    # minus n . p (perspective) or minus n_z (orthographic): > 0 when P faces the rays
+    facing = -np.einsum("ij,ij->i", n, p) if px.perspective else -n[:, 2]
+    ok = facing > 0
+    den = np.where(ok, facing, 1.0)
+    gx = np.abs(n[:, 0]) / abs(px.fx) / den
+    gy = np.abs(n[:, 1]) / abs(px.fy) / den
+    top = len(tables.near_pyramid) - 1
+    labels = tables.labels.reshape(-1)
+    W = px.shape[1]
+    rects = [r for r in rects if r is not None]
+    g = (np.arange(CLEAR_PROBES) + 0.5) / CLEAR_PROBES
+    for c0, c1, r0, r1, one in rects:
+        for fi in g:
+            for fj in g:
+                ti = (r0 + fi * (r1 - r0 + 1)).astype(np.intp)
+                tj = (c0 + fj * (c1 - c0 + 1)).astype(np.intp)
+                q = np.flatnonzero(ok & ~one & (labels[ti * W + tj] != label))
+                ti, tj = ti[q], tj[q]
+                fine = _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, ti, ti, tj, tj,
+                                  tables.near9[ti, tj], tables.far9[ti, tj])
+                ok[q[~fine]] = False
+    parts = []
+    for c0, c1, r0, r1, one in rects:
+        q = np.flatnonzero(ok & ~one)
+        if not q.size:
+            continue
+        c0, c1, r0, r1 = c0[q], c1[q], r0[q], r1[q]
+        span = np.maximum(c1 - c0, r1 - r0) + 1
+        # about 4 boxes a side to start with
+        lev = np.minimum(np.ceil(np.log2(np.maximum(span / 4.0, 1.0))).astype(np.intp), top)
+        bi0, bi1, bj0, bj1 = r0 >> lev, r1 >> lev, c0 >> lev, c1 >> lev
+        nj = bj1 - bj0 + 1
+        cnt = (bi1 - bi0 + 1) * nj
+        k = np.repeat(np.arange(len(q)), cnt)
+        off = np.arange(len(k)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        parts.append((q[k], lev[k], bi0[k] + off // nj[k], bj0[k] + off % nj[k], r0[k], r1[k], c0[k], c1[k]))
+    if not parts:
+        return ok
+    pix, lev, bi, bj, r0, r1, c0, c1 = (np.concatenate(a) for a in zip(*parts))
+    # and again in each first box, before the quadtree descends
+    i_lo = np.maximum(bi << lev, r0)
+    i_hi = np.minimum(((bi + 1) << lev) - 1, r1)
+    j_lo = np.maximum(bj << lev, c0)
+    j_hi = np.minimum(((bj + 1) << lev) - 1, c1)
+    for fi in g:
+        for fj in g:
+            ti = (i_lo + fi * (i_hi - i_lo + 1)).astype(np.intp)
+            tj = (j_lo + fj * (j_hi - j_lo + 1)).astype(np.intp)
+            test = ok[pix] & (labels[ti * W + tj] != label[pix])
+            q = pix[test]
+            ti, tj = ti[test], tj[test]
+            fine = _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, ti, ti, tj, tj,
+                              tables.near9[ti, tj], tables.far9[ti, tj])
+            ok[q[~fine]] = False
+    while len(pix):
+        keep = ok[pix]
+        pix, lev, bi, bj, r0, r1, c0, c1 = (a[keep] for a in (pix, lev, bi, bj, r0, r1, c0, c1))
+        if not len(pix):
+            break
+        # the box's texels within the rectangle
+        i_lo = np.maximum(bi << lev, r0)
+        i_hi = np.minimum(((bi + 1) << lev) - 1, r1)
+        j_lo = np.maximum(bj << lev, c0)
+        j_hi = np.minimum(((bj + 1) << lev) - 1, c1)
+        done = tables.one_label(label[pix], i_lo, i_hi, j_lo, j_hi)
+        near9 = np.empty(len(pix))
+        far9 = np.empty(len(pix))
+        for lv in np.unique(lev):
+            at = lev == lv
+            near9[at] = tables.near_pyramid[lv][bi[at], bj[at]]
+            far9[at] = tables.far_pyramid[lv][bi[at], bj[at]]
+        done |= _box_clear(px, p[pix], n[pix], pp[pix], den[pix], gx[pix], gy[pix], m[pix], RR,
+                           i_lo, i_hi, j_lo, j_hi, near9, far9)
+        ok[pix[~done & (lev == 0)]] = False
+        split = ~done & (lev > 0)
+        pix, lev, bi, bj, r0, r1, c0, c1 = (a[split] for a in (pix, lev, bi, bj, r0, r1, c0, c1))
+        lev = lev - 1
+        kids = []
+        for di in (0, 1):
+            for dj in (0, 1):
+                ci, cj = 2 * bi + di, 2 * bj + dj
+                meet = ((ci << lev) <= r1) & (((ci + 1) << lev) - 1 >= r0) & \
+                       ((cj << lev) <= c1) & (((cj + 1) << lev) - 1 >= c0)
+                kids.append((pix[meet], lev[meet], ci[meet], cj[meet], r0[meet], r1[meet], c0[meet], c1[meet]))
+        pix, lev, bi, bj, r0, r1, c0, c1 = (np.concatenate(a) for a in zip(*kids))
+        # each child's middle texel: a failure there ends its pixel before the next level
+        ti = (np.maximum(bi << lev, r0) + np.minimum(((bi + 1) << lev) - 1, r1)) // 2
+        tj = (np.maximum(bj << lev, c0) + np.minimum(((bj + 1) << lev) - 1, c1)) // 2
+        test = np.flatnonzero((lev > 0) & (labels[ti * W + tj] != label[pix]))
+        q, ti, tj = pix[test], ti[test], tj[test]
+        fine = _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, ti, ti, tj, tj,
+                          tables.near9[ti, tj], tables.far9[ti, tj])
+        ok[q[~fine]] = False
+    return ok
+
+
+def _box_clear(px, p, n, pp, den, gx, gy, m, RR, i_lo, i_hi, j_lo, j_hi, near9, far9):
+    """Whether every ray within one pixel of the texels i_lo..i_hi, j_lo..j_hi misses the ball
+    or has its depth (between ``near9`` and ``far9``) and its plane's depth on one side of its
+    chord (:func:`_clear_of_ball`; one row per box and its pixel)."""
+    # the rays' positions: from half a pixel before the first texel's centre minus one pixel to
+    # the last one's plus one; as a box of directions (a, b) = (x / z, y / z), or of view (x, y)
+    a_lo, a_hi = (j_lo - 0.5 - px.cx) / px.fx, (j_hi + 1.5 - px.cx) / px.fx
+    a_lo, a_hi = np.minimum(a_lo, a_hi), np.maximum(a_lo, a_hi)
+    b_lo, b_hi = (px.cy - i_hi - 1.5) / px.fy, (px.cy - i_lo + 0.5) / px.fy
+    b_lo, b_hi = np.minimum(b_lo, b_hi), np.maximum(b_lo, b_hi)
+    a = 0.5 * (a_lo + a_hi)
+    b = 0.5 * (b_lo + b_hi)
+    # the plane's reach from the centre to the box's corners, in pixels times the gradient
+    s = (0.5 * (j_hi - j_lo) + 1.0) * gx + (0.5 * (i_hi - i_lo) + 1.0) * gy
+    if px.perspective:
+        gap = _box_distance(a_lo, a_hi, b_lo, b_hi, p[:, 0] / p[:, 2], p[:, 1] / p[:, 2])
+        uu_lo = 1.0 + _box_distance(a_lo, a_hi, b_lo, b_hi, 0.0, 0.0) ** 2
+        uu_hi = 1.0 + np.maximum(np.abs(a_lo), np.abs(a_hi)) ** 2 + np.maximum(np.abs(b_lo), np.abs(b_hi)) ** 2
+        D2 = (p[:, 2] * gap) ** 2 / uu_hi
+        along = np.sqrt(np.maximum(pp - D2, 0.0))
+        half = np.sqrt(np.maximum(RR - D2, 0.0))
+        z_far = (along + half) / np.sqrt(uu_lo) + m
+        z_near = (along - half) / np.sqrt(uu_hi) - m
+        # 1 / z_P = (n . u) / (n . p), u = (a, b, 1) (Loos & Sloan 2010, Sec. 4.4)
+        inv = -(a * n[:, 0] + b * n[:, 1] + n[:, 2]) / den
+        far = (inv + s <= 1.0 / z_far) & (inv - s > 0)
+        with np.errstate(divide="ignore"):
+            near = (z_near > 0) & (inv - s >= 1.0 / z_near)
+    else:
+        D2 = _box_distance(a_lo, a_hi, b_lo, b_hi, p[:, 0], p[:, 1]) ** 2
+        half = np.sqrt(np.maximum(RR - D2, 0.0))
+        z_far = p[:, 2] + half + m
+        z_near = p[:, 2] - half - m
+        z_P = p[:, 2] + (n[:, 0] * (a - p[:, 0]) + n[:, 1] * (b - p[:, 1])) / den
+        far = z_P - s >= z_far
+        near = (z_near > 0) & (z_P + s <= z_near)
+    # rays that miss the ball by far more than the kernel's rounding of h^2 add 0
+    misses = D2 > RR + 1e-8 * pp
+    return misses | (far & (near9 >= z_far)) | (near & (far9 <= z_near))
+
+
+def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS, clear: bool = True) -> np.ndarray:
     """(k,) bool: the pixels whose every view ray through the ball reads, with the bilinear
-    fetch, a depth on the pixel's own plane.
+    fetch, a depth on the pixel's own plane, or (``clear`` and ``tables`` with depth) a depth
+    that, with the plane's own along that ray, lies beyond the ball's depth range on one side
+    (:func:`_clear_of_ball`).
 
     The ball's rays (the box of :func:`ball_box`, cut into ``strips`` equal bands of b) land,
     band by band, in rectangles of pixel positions (:func:`footprint_rows`: the rays through
@@ -306,12 +529,14 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
     the image position on a plane, and bilinear interpolation reproduces it), so each
     segment's occupied part is its part behind the tangent plane and the control variate of
     :func:`ray_kernel` cancels it exactly: V = 1/2 (1 with ``normal_clamp``), what the kernel
-    returns there.
+    returns there. The rays of :func:`_clear_of_ball` add exactly 0 too.
     """
     a0, a1, b0, b1, exact = ball_box(px, radius)
     H, W = px.shape
     label = tables.labels.reshape(-1)[px.index]
-    ok = exact & (label > 0)
+    inside = exact & (label > 0)
+    plane = np.ones(len(px.index), dtype=bool)
+    rects = []
     edges = np.linspace(0.0, 1.0, int(strips) + 1)
     for s_lo, s_hi in zip(edges[:-1], edges[1:]):
         lo_b = b0 + s_lo * (b1 - b0)
@@ -325,7 +550,15 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
             y1 = np.floor(px.cy - 0.5 - px.fy * lo_b) + 1
         # inside the image only: beyond its edge ``offscreen="clamp"`` repeats the edge pixel's
         # depth (not the plane's) and ``"open"`` reads nothing
-        ok &= (x0 >= 0) & (y0 >= 0) & (x1 <= W - 1) & (y1 <= H - 1)
-        c0, c1, r0, r1 = (np.where(ok, q, 0).astype(np.intp) for q in (x0, x1, y0, y1))
-        ok &= tables.one_label(label, r0, r1, c0, c1)
+        inside &= (x0 >= 0) & (y0 >= 0) & (x1 <= W - 1) & (y1 <= H - 1)
+        c0, c1, r0, r1 = (np.where(inside, q, 0).astype(np.intp) for q in (x0, x1, y0, y1))
+        one = tables.one_label(label, r0, r1, c0, c1)
+        plane &= one
+        rects.append((c0, c1, r0, r1, one))
+    ok = inside & plane
+    if clear and tables.near9 is not None:
+        sel = np.flatnonzero(inside & ~plane)
+        if sel.size:
+            ok[sel] = _clear_of_ball(px, radius, tables, sel, [
+                None if rect[4][sel].all() else tuple(q[sel] for q in rect) for rect in rects])
     return ok

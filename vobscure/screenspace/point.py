@@ -98,12 +98,13 @@ def _plane_tables(gbuffer, *, thickness, fetch):
     if thickness is not None or fetch != "bilinear":
         return None
     labels = plane_labels(gbuffer)
-    return None if labels is None else PlaneTables(labels)
+    return None if labels is None else PlaneTables(labels, gbuffer.depth)
 
 
 def _exact_pixels(gbuffer, radius, tables: PlaneTables) -> np.ndarray:
     """(H, W) bool: the pixels of :func:`vobscure.screenspace._segment.on_one_plane` (every
-    view ray through the ball reads the pixel's own plane), whose reference value is exact."""
+    view ray through the ball reads the pixel's own plane, or a depth that lies with the
+    plane's beyond the ball's depth range), whose reference value is exact."""
     flat = C.run_chunks(gbuffer, radius, lambda px: on_one_plane(px, radius, tables), np.dtype(np.float64))
     return flat == 1.0
 
@@ -442,8 +443,10 @@ def vo_reference(gbuffer, *, radius: float, samples=4096, normal_clamp: bool = F
     Estimate
         ``value`` and ``stderr`` of shape (H, W), NaN on background (float32 for a float32
         G-buffer). ``stderr`` is 0 where the value is exact: the pixels whose every view ray
-        through the ball reads the pixel's own flat plane (a rendered G-buffer, the bilinear
-        fetch, no thickness; ``docs/screenspace.md``, "Pixels that see only their own plane"),
+        through the ball reads the pixel's own flat plane, or another surface where it and the
+        plane both lie beyond the ray's chord through the ball on one side (a rendered
+        G-buffer, the bilinear fetch, no thickness; ``docs/screenspace.md``, "Pixels that see
+        only their own plane" and "Other surfaces beyond the ball"),
         where the control variate's closed form, 1/2 (1 with ``normal_clamp``), is the value
         and no Monte Carlo mean; and where every group reads 0 or every group reads 1. Where
         every group agrees on another value strictly between 0 and 1, ``stderr`` is one step
