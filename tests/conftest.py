@@ -94,3 +94,35 @@ def crease_view(crease):
     R = CREASE_RADIUS
     floor = interior(gb, R) & (np.abs(y) < 1e-9) & (x > 0.05 * R) & (x < 0.95 * R)
     return CreaseView(gb, floor, x[floor] / R)
+
+
+#: Views inside the Cornell box (the realistic case of walls, creases and boxes in the ball) of
+#: the converged reference's tests, with their image size and ball radius.
+INSIDE_VIEWS = {"perspective": dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0),
+                "orthographic": dict(eye=(0.1, 1.1, 2.5), target=(-0.2, 0.8, -1.0), ortho_height=1.6)}
+INSIDE_SIZE = (20, 14)
+INSIDE_RADIUS = 0.375
+
+
+def inside_views() -> dict:
+    """The G-buffers of :data:`INSIDE_VIEWS`, by name."""
+    import vobscure as vo
+
+    scene = vo.scenes.cornell_box()
+    out = {}
+    for name, view in INSIDE_VIEWS.items():
+        kw = dict(view)
+        cam = vo.Camera.look_at(kw.pop("eye"), kw.pop("target"), size=INSIDE_SIZE, **kw)
+        out[name] = vo.render_gbuffer(scene, cam)
+    return out
+
+
+def one_slice_z(estimator, *, clip: bool, frames: int = 64) -> float:
+    """z-score of the mean of ``frames`` independent one-slice frames (white noise per frame) of
+    ``estimator`` (gtao, vbao) on an open plane seen obliquely, against its integral 1."""
+    import vobscure as vo
+
+    cam = vo.Camera.look_at((1, 2, 1.5), (0, 0, 0), size=(16, 16), fov_y=40)
+    gb = vo.render_gbuffer(vo.scenes.slab(), cam)
+    means = np.array([np.nanmean(estimator(gb, radius=0.3, slices=1, frame=n, clip=clip)) for n in range(frames)])
+    return float((means.mean() - 1.0) / (means.std(ddof=1) / np.sqrt(frames)))

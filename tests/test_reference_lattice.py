@@ -13,16 +13,13 @@ import vobscure as vo
 from vobscure.estimate import DEFAULT_GROUPS
 from vobscure.screenspace import point as P
 
-from conftest import FALSE_FAILURE, t_threshold
+from conftest import FALSE_FAILURE, INSIDE_RADIUS, INSIDE_SIZE, inside_views, t_threshold
 
 #: Chi-square test of the shifted lattice's points: draws, the histogram's cells per axis, and
 #: the points (indices) tested, Bonferroni over them.
 DRAWS, BINS, TESTED_POINTS = 4096, 8, (0, 7, 40, 63)
-#: Views inside the Cornell box, as in test_screen_reference.py.
-PERSPECTIVE = dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0)
-ORTHOGRAPHIC = dict(eye=(0.1, 1.1, 2.5), target=(-0.2, 0.8, -1.0), ortho_height=1.6)
-SIZE = (20, 14)
-RADIUS = 0.375
+#: Views inside the Cornell box (conftest.INSIDE_VIEWS).
+SIZE, RADIUS = INSIDE_SIZE, INSIDE_RADIUS
 #: Rays of the lattice reference and of the jittered one it is tested against (the second
 #: converged further, so that the test's power lies in the lattice's side).
 LATTICE_RAYS, JITTERED_RAYS = 512, 2048
@@ -101,13 +98,7 @@ def test_lattice_generator_of_many_points_is_near_the_golden_ratio():
 
 @pytest.fixture(scope="module")
 def views():
-    scene = vo.scenes.cornell_box()
-    out = {}
-    for name, view in (("perspective", PERSPECTIVE), ("orthographic", ORTHOGRAPHIC)):
-        kw = dict(view)
-        cam = vo.Camera.look_at(kw.pop("eye"), kw.pop("target"), size=SIZE, **kw)
-        out[name] = vo.render_gbuffer(scene, cam)
-    return out
+    return inside_views()
 
 
 def _args(**kw):

@@ -12,13 +12,10 @@ import vobscure as vo
 from vobscure.estimate import DEFAULT_GROUPS
 from vobscure.screenspace import point as P
 
-from conftest import FALSE_FAILURE, t_threshold
+from conftest import FALSE_FAILURE, INSIDE_RADIUS, INSIDE_SIZE, inside_views, t_threshold
 
-#: Views inside the Cornell box: the realistic case of walls, creases and boxes in the ball.
-PERSPECTIVE = dict(eye=(0.2, 1.0, 0.6), target=(-0.3, 0.7, -1.0), fov_y=60.0)
-ORTHOGRAPHIC = dict(eye=(0.1, 1.1, 2.5), target=(-0.2, 0.8, -1.0), ortho_height=1.6)
-SIZE = (20, 14)
-RADIUS = 0.375
+#: Views inside the Cornell box (conftest.INSIDE_VIEWS).
+SIZE, RADIUS = INSIDE_SIZE, INSIDE_RADIUS
 #: Rays of the segments and points of the independent point sampling.
 SEGMENTS, POINTS = 256, 512
 #: Below this stderr both computations agree that a pixel is exact (a plane in the ball):
@@ -34,13 +31,7 @@ CALLS = 2 * len(CASES) + 3
 
 @pytest.fixture(scope="module")
 def views():
-    scene = vo.scenes.cornell_box()
-    out = {}
-    for name, view in (("perspective", PERSPECTIVE), ("orthographic", ORTHOGRAPHIC)):
-        kw = dict(view)
-        cam = vo.Camera.look_at(kw.pop("eye"), kw.pop("target"), size=SIZE, **kw)
-        out[name] = vo.render_gbuffer(scene, cam)
-    return out
+    return inside_views()
 
 
 def _both(gb, radius=RADIUS, seed=0, **kw):

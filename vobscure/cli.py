@@ -24,6 +24,8 @@ import numpy as np
 
 from ._argv import joined_list_values, numbers_as_written
 from .references import SCREEN_SAMPLES
+from .screenspace.noise import SCHEDULES
+from .temporal import DENOISE_STEPS, MOTIONS
 
 __all__ = ["main", "render"]
 
@@ -117,7 +119,7 @@ def _parser() -> argparse.ArgumentParser:
     seq.add_argument("--frames", type=int, default=0, metavar="N",
                      help="run every method over N frames, accumulate, and score each frame (temporal.csv, "
                           "temporal.png, the verdict's frame sentences)")
-    seq.add_argument("--motion", choices=("static", "orbit", "dolly"), default="static",
+    seq.add_argument("--motion", choices=MOTIONS, default="static",
                      help="the camera path of the frames (default static)")
     seq.add_argument("--step", type=float, default=None, metavar="X",
                      help="per-frame step: degrees for orbit (default 0.5), fraction of the eye-target distance "
@@ -125,13 +127,13 @@ def _parser() -> argparse.ArgumentParser:
     seq.add_argument("--cameras", type=Path, default=None, metavar="FILE",
                      help="a JSON list of camera records (Camera.to_dict) as the path, in place of --motion")
     seq.add_argument("--schedule", default="white", metavar="LIST",
-                     help="noise schedules per frame, comma-separated: white, rotate, r2, gtao, blue (default white)")
+                     help=f"noise schedules per frame, comma-separated: {', '.join(SCHEDULES)} (default white)")
     seq.add_argument("--accumulate", default="mean", metavar="LIST",
                      help="accumulations, comma-separated: mean, ema:ALPHA, clip:ALPHA (default mean)")
     seq.add_argument("--clamp", action="store_true", help="clamp the history to the new frame's 3x3 range")
     seq.add_argument("--no-reprojection", dest="reproject", action="store_false",
                      help="use the history in place (shows the ghosting that reprojection avoids)")
-    seq.add_argument("--denoise", choices=("before", "after"), default=None,
+    seq.add_argument("--denoise", choices=DENOISE_STEPS, default=None,
                      help="the bilateral blur on each frame before accumulating, or on the accumulated image")
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--target-rmse", type=float, default=None, metavar="X",

@@ -81,6 +81,7 @@ def configurations(methods, *, schedules="white", accumulate="mean", clamp: bool
     comma-separated), ``schedules`` and ``accumulate`` settings (each a comma-separated string or
     a sequence), with the same accumulator options."""
     from ..screenspace.noise import SCHEDULES
+    from ..temporal import DENOISE_STEPS
 
     configs = _methods.parse(methods)
     scheds = _as_list(schedules, "schedules")
@@ -89,8 +90,6 @@ def configurations(methods, *, schedules="white", accumulate="mean", clamp: bool
     accs = [parse_accumulate(a) for a in _as_list(accumulate, "accumulate")]
     if not scheds or not accs:
         raise ValueError("schedules and accumulate must each name at least one setting")
-    from ..temporal import DENOISE_STEPS
-
     if denoise is not None:
         check_choice(denoise, "denoise", DENOISE_STEPS)
     clamp, reproject = check_bool(clamp, "clamp"), check_bool(reproject, "reproject")
@@ -269,13 +268,12 @@ def run(scene, configs, *, camera=None, size=None, frames: int = 8, motion: str 
     bar = progress_bar(frames * len(configs), "frames", progress)
     ref_memo = {}
     for n, cam in enumerate(cams):
-        key = cam.to_dict().__repr__()
-        if key not in ref_memo:
-            ref_memo[key] = _frame_references(references, sc, cam, radius, normal_clamp=normal_clamp,
+        if cam not in ref_memo:        # a static path's frames share one view
+            ref_memo[cam] = _frame_references(references, sc, cam, radius, normal_clamp=normal_clamp,
                                               thickness=thickness, rays=rays,
                                               screen_samples=screen_samples, volume_samples=volume_samples,
                                               seed=seed, cache=store, allow_open=allow_open)
-        gb, refs = ref_memo[key]
+        gb, refs = ref_memo[cam]
         per_frame_refs.append(refs)
         for c in configs:
             # unclipped frames (gtao's clip=False) average to the integral; what is shown is clipped

@@ -239,26 +239,25 @@ class Accumulator:
             x = self._blur(x, gb)
         t0 = time.perf_counter()
         fresh = np.isfinite(x)
-        if self.history is None or self.history.shape != x.shape and not self.reproject:
-            prev, n_prev, ok = None, None, np.zeros(x.shape, bool)
-        elif self.reproject:
-            r = reproject(self.history, gb, self._previous, count=self.count, fetch=self.fetch,
-                          depth_tolerance=self.depth_tolerance)
-            prev, n_prev, ok = r.value, r.count, r.found & fresh
+        restart = np.where(fresh, x, np.nan)
+        if self.history is None or (not self.reproject and self.history.shape != x.shape):
+            # the first frame (or an in-place history of another shape): the frame itself
+            out, n = restart, fresh.astype(np.int32)
         else:
-            prev, n_prev = self.history, self.count
-            ok = fresh & np.isfinite(prev)
-        if prev is not None:
+            if self.reproject:
+                r = reproject(self.history, gb, self._previous, count=self.count, fetch=self.fetch,
+                              depth_tolerance=self.depth_tolerance)
+                prev, n_prev, ok = r.value, r.count, r.found & fresh
+            else:
+                prev, n_prev = self.history, self.count
+                ok = fresh & np.isfinite(prev)
             prev = self._limit(prev, x)
-        n = np.where(ok, n_prev + 1 if n_prev is not None else 1, fresh.astype(np.int32)).astype(np.int32)
-        if prev is None:
-            out = np.where(fresh, x, np.nan)
-        else:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                w = 1.0 / np.maximum(n, 1)
-                if self.spec.alpha is not None:
-                    w = np.maximum(self.spec.alpha, w)
-                out = np.where(ok, prev + w * (x - prev), np.where(fresh, x, np.nan))
+            n = np.where(ok, n_prev + 1, fresh).astype(np.int32)
+            w = 1.0 / np.maximum(n, 1)
+            if self.spec.alpha is not None:
+                w = np.maximum(self.spec.alpha, w)
+            with np.errstate(invalid="ignore"):
+                out = np.where(ok, prev + w * (x - prev), restart)
         self.history, self.count, self._previous = out, n, gb
         self.seconds += time.perf_counter() - t0
         self.frames += 1
