@@ -140,6 +140,7 @@ def _frame_references(names, scene, camera, radius, *, normal_clamp, thickness, 
     """The references ``names`` of one camera's view (through the sweep's memo and the disk cache)."""
     from .sweeps import SweepConfig, view, view_reference
 
+    # a sweep configuration names the view and the references' parameters; its method is not run
     cfg = SweepConfig(scene=scene, camera=camera, method="line", samples=1, radius=radius, normal_clamp=normal_clamp,
                       thickness=thickness, references=tuple(names), rays=rays, screen_samples=screen_samples,
                       volume_samples=volume_samples, reference_seed=seed, allow_open=allow_open)
