@@ -1,5 +1,5 @@
 """The rays of vo_reference on a randomly shifted rank-1 lattice: the warp's distribution (each
-point uniform in the square), the generator against a brute-force search, and the reference
+point uniform in the square), the generator's figure of merit against its definition and the generator against a brute-force search, and the reference
 against the jittered-grid reference it replaced (the same expectation: z-tests with both reported
 standard errors). The closed forms of the crease: test_point.py."""
 
@@ -62,26 +62,46 @@ def test_shifted_lattice_is_one_lattice_moved(n):
     assert sorted(columns.tolist()) == list(range(n))
 
 
-def _pairwise_min_distance(n, z):
-    """Shortest toroidal distance between two of the lattice's points, over all pairs (no use of
-    the lattice's group structure)."""
-    i = np.arange(n)
-    pts = np.column_stack([i / n, (i * z % n) / n])
-    d = np.abs(pts[:, None, :] - pts[None, :, :])
-    d = np.minimum(d, 1.0 - d)
-    r2 = (d ** 2).sum(axis=-1)
-    r2[i, i] = np.inf
-    return float(r2.min())
+def _dual_sum(n, z, M):
+    """P_2 of the lattice from its definition (no Bernoulli polynomial): the sum over the
+    nonzero dual vectors h, h_1 + z h_2 = 0 (mod n), |h_1|, |h_2| <= M, of
+    1 / (max(1, |h_1|) max(1, |h_2|))^2, and a bound on the terms left out. In each row h_2 the
+    h_1 of the class beyond M add at most 2 (1 / M^2 + 1 / (n M)), times sum 1 / max(1, |h_2|)^2
+    <= 1 + pi^2 / 3 over the rows; the rows past M add at most (1 + 2 (1 + pi^2 / 6)) 2 / M."""
+    total = 0.0
+    h2 = np.arange(-M, M + 1)
+    for part in np.array_split(h2, 64):
+        r = (-z * part) % n                       # the class of h_1 in each row
+        k = np.arange(-(M // n) - 1, M // n + 2)
+        h1 = r[:, None] + n * k[None, :]
+        keep = (np.abs(h1) <= M) & ~((h1 == 0) & (part[:, None] == 0))
+        w = 1.0 / (np.maximum(1, np.abs(h1)) * np.maximum(1, np.abs(part))[:, None]) ** 2
+        total += float(w[keep].sum())
+    tail = (1 + np.pi ** 2 / 3) * 2 * (1 / M ** 2 + 1 / (n * M)) + (1 + 2 * (1 + np.pi ** 2 / 6)) * 2 / M
+    return total, tail
 
 
-@pytest.mark.parametrize("n", [5, 21, 34, 55, 64, 100])
+@pytest.mark.parametrize("n, z", [(5, 2), (34, 13), (48, 7), (48, 11), (55, 21), (58, 17)])
+def test_lattice_merit_is_the_sum_over_the_dual_lattice(n, z):
+    """The closed form of P_2 (Bernoulli polynomials) agrees with its definition summed over
+    the dual lattice, within the bound on the truncated terms."""
+    direct, tail = _dual_sum(n, z, M=20000)
+    assert tail < 1e-3
+    assert float(P.lattice_merit(n, z)[0]) == pytest.approx(direct, abs=tail + 1e-9)
+
+
+@pytest.mark.parametrize("n", [5, 21, 34, 48, 55, 58, 64, 100])
 def test_lattice_generator_is_the_best_by_brute_force(n):
-    """The generator's points are as far apart as those of any generator coprime to n, every
-    pair compared."""
+    """No generator coprime to n (either half: z and n - z mirror one lattice) has a smaller
+    P_2, and the Fibonacci lattices win where n is a Fibonacci number."""
     z = P.lattice_generator(n)
-    assert np.gcd(z, n) == 1
-    best = max(_pairwise_min_distance(n, w) for w in range(1, n) if np.gcd(w, n) == 1)
-    assert _pairwise_min_distance(n, z) == pytest.approx(best, rel=1e-12)
+    assert np.gcd(z, n) == 1 and z <= n // 2
+    others = [w for w in range(1, n) if np.gcd(w, n) == 1]
+    merits = P.lattice_merit(n, others)
+    assert P.lattice_merit(n, z)[0] <= merits.min() + 1e-12
+    if n in (5, 21, 34, 55):
+        fib = {5: 2, 21: 8, 34: 13, 55: 21}[n]          # F_(k-2): the mirror of F_(k-1)
+        assert z == fib
 
 
 def test_lattice_generator_of_many_points_is_near_the_golden_ratio():

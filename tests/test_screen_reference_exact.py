@@ -1,6 +1,8 @@
 """The converged screen-space reference's exact pixels next to other surfaces: a pixel on a plane
 whose ball's footprint also reads other surfaces is exact when those surfaces and the plane both
-lie beyond each ray's chord through the ball, on one side (``_segment._clear_of_ball``).
+lie beyond each ray's chord through the ball, on one side (``_segment._clear_of_ball``); so is a
+pixel whose footprint leaves the image when the rays past the edge, which read the border's depth,
+are clear in the same way (``_segment._overflow_clear``).
 
 Checked on hand-made scenes against the segment kernel itself with the shortcut off (every
 group must read the closed form bit for bit) and against the independent point sampling of the
@@ -24,7 +26,7 @@ RADIUS = 0.3
 SEGMENTS, POINTS = 128, 4096
 OBSTACLES = ["wall", "cube", "ledge"]
 #: Calls of the t-test in this module (Bonferroni with the pixels).
-CALLS = 2 * len(OBSTACLES) + 2
+CALLS = 2 * len(OBSTACLES) + 3
 
 
 def _floor_scene(obstacle: str):
@@ -59,16 +61,46 @@ def _view(obstacle: str, ortho: bool, size=(64, 48)):
     return vo.render_gbuffer(scene, cam)
 
 
-def _claims(gb, radius=RADIUS):
+def _claims(gb, radius=RADIUS, offscreen="clamp"):
     """(H, W) bool images: exact with the plane-only test, and exact with the extended one."""
     tables = S.PlaneTables(S.plane_labels(gb), gb.depth)
     px = Cm.prepare(gb, radius)
     out = []
     for clear in (False, True):
         flat = np.zeros(gb.depth.size, dtype=bool)
-        flat[px.index] = S.on_one_plane(px, radius, tables, clear=clear)
+        flat[px.index] = S.on_one_plane(px, radius, tables, clear=clear, offscreen=offscreen)
         out.append(flat.reshape(gb.shape))
     return out
+
+
+def _corridor_view(pit: bool = False):
+    """Inside a corridor (a floor, two side walls, an end wall), looking along it: the side walls
+    and the floor meet the image's edges at grazing angles, and many of their balls' footprints
+    leave the image. ``pit``: the floor has a hole (x in [0.2, 0.6], z in [-1.6, -0.8]) over a
+    lower floor 2 below, which the image's bottom row crosses: there the border reads depths
+    far behind the balls of the floor next to it."""
+    import trimesh
+    parts = {}
+    floor = [("floor", (2.0, 0.2, 12.0), (0.0, -0.1, -5.0))]
+    if pit:
+        floor = [("floor_left", (1.2, 0.2, 12.0), (-0.4, -0.1, -5.0)),
+                 ("floor_right", (0.4, 0.2, 12.0), (0.8, -0.1, -5.0)),
+                 ("floor_near", (0.4, 0.2, 1.8), (0.4, -0.1, 0.1)),
+                 ("floor_far", (0.4, 0.2, 9.4), (0.4, -0.1, -6.3)),
+                 ("pit_bottom", (2.0, 0.2, 12.0), (0.0, -2.1, -5.0))]
+    for name, extents, centre in floor + [("left", (0.2, 2.5, 12.0), (-1.1, 1.25, -5.0)),
+                                          ("right", (0.2, 2.5, 12.0), (1.1, 1.25, -5.0)),
+                                          ("end", (2.0, 2.5, 0.2), (0.0, 1.25, -11.0))]:
+        box = trimesh.creation.box(extents=extents)
+        box.apply_translation(centre)
+        parts[name] = box
+    cam = vo.Camera.look_at((0.0, 1.0, 0.5), (0.0, 0.9, -5.0), size=(64, 48), fov_y=60.0)
+    return vo.render_gbuffer(vo.scenes.Scene(parts), cam)
+
+
+def _past_the_edge(gb, radius=RADIUS):
+    """(H, W) bool: the pixels exact with the rays past the image's edge checked, and not without."""
+    return _claims(gb, radius)[1] & ~_claims(gb, radius, offscreen=None)[1]
 
 
 def _args(**kw):
@@ -101,7 +133,7 @@ def test_new_exact_pixels_read_the_closed_form_in_every_group(obstacle, ortho, c
     value and the stderr 0 the shortcut reports are the kernel's own; elsewhere the shortcut
     changes nothing."""
     gb = _view(obstacle, ortho)
-    plane, extended = _claims(gb)
+    plane, extended = _claims(gb, offscreen=case.get("offscreen", "clamp"))
     new = extended & ~plane
     on = P._reference(gb, samples=SEGMENTS, seed=5, along="segment", **_args(**case))
     with monkeypatch.context() as mp:
@@ -154,3 +186,69 @@ def test_balls_that_meet_or_hide_behind_the_cube_are_not_exact(ortho):
     limit = t_threshold(DEFAULT_GROUPS - 1, tests=CALLS * int(gb.valid.sum()), false_failure=FALSE_FAILURE)
     off_half = on_floor & ~meets & (np.abs(pts.value - 0.5) > limit * pts.stderr)
     assert off_half.sum() > 5 and not extended[off_half].any()
+
+
+def test_footprints_past_the_edge_can_be_exact():
+    """Inside the corridor, pixels of the grazing walls and floor whose footprint leaves the image
+    are exact once the rays past the edge are checked (with ``offscreen="clamp"``: their border
+    reads and the plane lie in front of their chords); every pixel exact without that check stays
+    exact; with ``"open"`` (an infinite depth past the edge) the same rays are not clear."""
+    gb = _corridor_view()
+    assert np.all(_claims(gb)[1][_claims(gb, offscreen=None)[1]])
+    assert _past_the_edge(gb).sum() >= 50, _past_the_edge(gb).sum()
+    np.testing.assert_array_equal(_claims(gb, offscreen="open")[1], _claims(gb, offscreen=None)[1])
+
+
+@pytest.mark.parametrize("case", [dict(), dict(normal_clamp=True), dict(falloff="quadratic")],
+                         ids=lambda c: ",".join(f"{k}={v}" for k, v in c.items()) or "default")
+@pytest.mark.parametrize("pit", [False, True])
+def test_past_the_edge_pixels_read_the_closed_form_in_every_group(case, pit, monkeypatch):
+    """The segment kernel without the shortcut reads 1/2 (1 clamped) bit for bit in every group on
+    the pixels exact past the edge, and the shortcut changes no value; the check has teeth: other
+    pixels whose footprint leaves the image read something else (with the pit, some through the
+    border's reads of the pit), and are not claimed."""
+    gb = _corridor_view(pit)
+    past = _past_the_edge(gb)
+    _, extended = _claims(gb)
+    on = P._reference(gb, samples=SEGMENTS, seed=9, along="segment", **_args(**case))
+    with monkeypatch.context() as mp:
+        mp.setattr(P, "_plane_tables", lambda *a, **k: None)
+        off = P._reference(gb, samples=SEGMENTS, seed=9, along="segment", **_args(**case))
+    expected = 1.0 if case.get("normal_clamp") else 0.5
+    assert np.all(off.value[past] == expected), np.abs(off.value[past] - expected).max()
+    np.testing.assert_array_equal(on.value, off.value)
+    assert np.all(on.stderr[extended] == 0.0)
+    # footprints that leave the image (the plane-only test's refusal) and read other values
+    H, W = gb.shape
+    i, j = np.indices(gb.shape)
+    reach = RADIUS * gb.camera.fy / np.where(gb.valid, gb.depth, np.inf)
+    leaves = gb.valid & (np.minimum(np.minimum(i, H - 1 - i), np.minimum(j, W - 1 - j)) < reach)
+    assert (leaves & (off.value != expected)).sum() >= 50
+    assert not extended[leaves & (off.value != expected)].any()
+
+
+def test_past_the_edge_pixels_agree_with_point_sampling():
+    """The independent point sampling of the ball agrees with 1/2 on every pixel exact past the
+    edge (t-test with its reported stderr, Bonferroni over the pixels and this module's calls)."""
+    gb = _corridor_view()
+    past = _past_the_edge(gb)
+    pts = P._reference(gb, samples=POINTS, seed=13, along="point", **_args())
+    z = (pts.value[past] - 0.5) / pts.stderr[past]
+    limit = t_threshold(DEFAULT_GROUPS - 1, tests=CALLS * int(past.sum()), false_failure=FALSE_FAILURE)
+    assert np.all(pts.stderr[past] > 0)
+    assert np.max(np.abs(z)) < limit, (np.abs(z).max(), limit)
+
+
+@pytest.mark.parametrize("size", [1, 2, 3, 7, 64, 100])
+def test_border_bounds_are_the_least_and_greatest_of_each_run(size):
+    """The sparse tables behind the border lines' bounds give each run's least and greatest value,
+    against a direct minimum and maximum (runs given in either order, clipped to the line)."""
+    rng = np.random.default_rng(size)
+    line = rng.random(size)
+    line[rng.random(size) < 0.2] = np.inf                    # background
+    table = S._RangeBounds(line)
+    lo, hi = rng.integers(-3, size + 3, 400), rng.integers(-3, size + 3, 400)
+    least, most = table.bounds(lo, hi)
+    a, b = np.clip(np.minimum(lo, hi), 0, size - 1), np.clip(np.maximum(lo, hi), 0, size - 1)
+    assert np.array_equal(least, [line[x:y + 1].min() for x, y in zip(a, b)])
+    assert np.array_equal(most, [line[x:y + 1].max() for x, y in zip(a, b)])

@@ -27,34 +27,29 @@ import numpy as np
 from . import _common as C
 from ._segment import BALL_MASS, PLANE_RTOL, ball_box
 
-#: Fewest pixels per block of the loop over rays. Two threads on blocks of 8192 pixels spent
-#: more CPU than one thread on the whole chunk (NumPy's calls on short arrays hand the GIL back
-#: and forth); from about 32768 pixels a block the second core pays (``benchmarks/
-#: bench_groundtruth.py``, benchmark 4). Values do not depend on the blocks (every operation
-#: is per pixel).
-MIN_BLOCK = 32768
-
-#: Valid pixels per chunk of :func:`vobscure.vo_reference`'s segment path: enough for one block
-#: per thread of :data:`MIN_BLOCK` pixels or more. Peak memory: 82 MB (tracemalloc) for the
-#: atrium at 640 x 360, the per-image tables included: under 630 bytes a pixel of the chunk.
-CHUNK_PIXELS = 131072
+#: Valid pixels per chunk of :func:`vobscure.vo_reference`'s segment path. The chunks run on a
+#: thread pool, one per core at a time (NumPy releases the GIL in its loops, and the Python
+#: between them in one chunk overlaps the other's arithmetic); every operation is per pixel, so
+#: the chunks do not change the values. Peak memory: under 630 bytes a pixel of the chunks in
+#: flight (82 MB measured by tracemalloc for the atrium at 640 x 360 with chunks of 131072
+#: pixels, the per-image tables included).
+CHUNK_PIXELS = 65536
 
 _POOL: list[ThreadPoolExecutor] = []
 
 
 def _threads() -> int:
-    """The cores this process may use (the blocks of a chunk run on as many threads: NumPy
-    releases the GIL in its loops)."""
+    """The cores this process may use (the chunks run on as many threads)."""
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - non-Linux
         return max(1, os.cpu_count() or 1)
 
 
-def _map(fn, items):
+def parallel_chunks(fn, items) -> list:
     """``[fn(item) for item in items]``, on this module's own thread pool when there are several
     (its own: a caller may itself run on the tracer's pool)."""
-    if len(items) <= 1:
+    if len(items) <= 1 or _threads() == 1:
         return [fn(item) for item in items]
     if not _POOL:
         _POOL.append(ThreadPoolExecutor(_threads(), thread_name_prefix="vobscure-segments"))
@@ -174,6 +169,56 @@ def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
     return out
 
 
+def _depth_terms(z_m, h, zp, d, away, perspective):
+    """The control variate's difference along each ray for the default options (constant
+    falloff, the whole ball, no thickness), from the depths of the chord's ends z_m -+ h, of the
+    tangent plane along the ray ``zp`` and of the fetched depth ``d``: the occupied part
+    [max(d, 0), z_m + h] minus the part behind the plane ([zp, z_m + h], or [z_m - h, zp] where
+    ``away``), each clipped to the chord, integrated with J = z^2 as z^3 differences (three
+    times the integral; the caller divides by 3) under perspective, J = 1 orthographically.
+    A depth on the plane (within :data:`PLANE_RTOL`) adds exactly 0, as do a depth and a plane
+    both beyond one end of the chord (their clipped depths are the same number). ``d`` and
+    ``zp`` are overwritten. The rounding is about eps z / R of the value (cubes of the depths),
+    far below any standard error."""
+    z_lo = z_m - h
+    z_hi = np.add(z_m, h, out=h)
+    zc = np.minimum(np.maximum(zp, z_lo), z_hi)
+    if not perspective:
+        # Loos & Sloan 2010, Sec. 4: occupied where max(d, 0) < z (a negative d is never on
+        # the plane below, whose test needs |d - zp| < PLANE_RTOL d)
+        np.maximum(d, 0.0, out=d)
+    zl = np.minimum(np.maximum(d, z_lo), z_hi)
+    q = np.subtract(d, zp, out=zp)
+    np.abs(q, out=q)
+    # (< rather than <=: a background d = inf is not on the plane)
+    on_plane = q < PLANE_RTOL * d
+    if on_plane.any():
+        np.copyto(zl, zc, where=on_plane)
+    if perspective:
+        # Sec. 4.4: (zc^3 - zl^3), or (z_hi^3 + z_lo^3) - zl^3 - zc^3 where away
+        cc = zc * zc
+        cc *= zc
+        ll = np.multiply(zl, zl, out=d)
+        ll *= zl
+        if away.any():
+            ends = z_hi * z_hi
+            ends *= z_hi
+            lo3 = z_lo * z_lo
+            lo3 *= z_lo
+            ends += lo3
+            ends -= ll
+            ends -= cc
+            out = np.subtract(cc, ll, out=cc)
+            np.copyto(out, ends, where=away)
+            return out
+        return np.subtract(cc, ll, out=cc)
+    if away.any():
+        out = np.subtract(zc, zl)
+        np.copyto(out, (z_hi + z_lo) - zl - zc, where=away)
+        return out
+    return np.subtract(zc, zl, out=zc)
+
+
 def _even(z_m, h2, perspective, quadratic):
     """F(h) + F(-h) (0 orthographically, where J is even in t)."""
     if not perspective:
@@ -185,26 +230,18 @@ def segment_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, cells,
     """:func:`vobscure.screenspace._segment.ray_kernel` with the bilinear depth of ``cells``
     (a :class:`DepthCells` of ``px.depth``; None: ``fetch="nearest"``): the same ((k,) V,
     (k,) exact) within float64 rounding."""
-    k = len(px.index)
     R = float(radius)
     a0, a1, b0, b1, exact = ball_box(px, R)
-    px.p, px.n                      # computed once, before the threads read them
-    parts = max(1, min(_threads(), k // MIN_BLOCK))
-    edges = np.linspace(0, k, parts + 1).astype(int)
-
-    def run(sl):
-        return _block(px, sl, a0[sl], a1[sl] - a0[sl], b0[sl], b1[sl] - b0[sl], R, unit, normal_clamp,
-                      thickness, falloff, cells, offscreen, shift[sl])
-    v = np.concatenate(_map(run, [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]))
+    v = _block(px, a0, a1 - a0, b0, b1 - b0, R, unit, normal_clamp, thickness, falloff, cells, offscreen, shift)
     return v, exact
 
 
-def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
-    """The V of the pixels ``sl`` of ``px`` (see :func:`segment_kernel`)."""
+def _block(px, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
+    """The V of the pixels of ``px`` (see :func:`segment_kernel`)."""
     quadratic = falloff == "quadratic"
     persp = px.perspective
-    pc = [np.ascontiguousarray(px.p[sl, a]) for a in range(3)]
-    nc = [np.ascontiguousarray(px.n[sl, a]) for a in range(3)]
+    pc = [np.ascontiguousarray(px.p[:, a]) for a in range(3)]
+    nc = [np.ascontiguousarray(px.n[:, a]) for a in range(3)]
     n_p = nc[0] * pc[0] + nc[1] * pc[1] + nc[2] * pc[2]
     pp = pc[0] * pc[0] + pc[1] * pc[1] + pc[2] * pc[2]
     RR = R * R
@@ -222,6 +259,8 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
     s1 = np.ascontiguousarray(shift[:, 0])
     s2 = np.ascontiguousarray(shift[:, 1])
     m = len(a0)
+    # the default options: the segment's terms from its ends' depths (_depth_terms)
+    simple = thickness is None and not normal_clamp and not quadratic
     acc = np.zeros(m)
     F_lo, F_b, tmp = np.empty(m), np.empty(m), np.empty(m)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -259,7 +298,7 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 # the tangent plane n . (X - p) = 0 meets the ray at depth n.p / n.u
                 # (Loos & Sloan 2010, Sec. 4.4), t = cut there
                 zp = n_p / c1
-                cut = zp - z_m
+                cut = None if simple else zp - z_m
                 if quadratic:
                     uu_r2 = uu
                     uu_r2 /= RR
@@ -279,9 +318,15 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
                 uu_r2 = 1.0 / RR
             np.maximum(h2, 0.0, out=h2)
             h = np.sqrt(h2)
+            away = c1 > 0          # the half-ball lies beyond the plane along the ray
+            if simple:
+                contrib = _depth_terms(z_m, h, zp, fetch(fx, fy), away, persp)
+                if not np.isfinite(np.add.reduce(contrib)):
+                    contrib[~np.isfinite(contrib)] = 0.0
+                acc += contrib
+                continue
             mh = np.negative(h)
             np.minimum(np.maximum(cut, mh, out=cut), h, out=cut)
-            away = c1 > 0          # the half-ball lies beyond the plane along the ray
             if normal_clamp:
                 lo_seg = np.where(away, cut, mh)
                 hi_seg = np.where(away, h, cut)
@@ -333,6 +378,8 @@ def _block(px, sl, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, ce
             acc += contrib
     mass = BALL_MASS[falloff] * R ** 3
     scale = (da * db) / len(unit)
+    if simple and persp:
+        scale /= 3.0                # _depth_terms: 3 int z^2 dz
     if normal_clamp:
         return 1.0 - scale * acc / (0.5 * mass)
     # control variate: its scaled mean is mass / 2 exactly (_segment.ray_kernel)

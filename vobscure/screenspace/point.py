@@ -18,7 +18,7 @@ from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
 from ._segment import PlaneTables, on_one_plane, plane_labels, ray_kernel
-from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS, DepthCells, segment_kernel
+from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS, DepthCells, parallel_chunks, segment_kernel
 
 __all__ = ["vo_point", "vo_reference", "point_taps"]
 
@@ -39,57 +39,62 @@ def _point_vo(gbuffer, *, radius, pattern: SamplePattern, normal_clamp, thicknes
 
 
 def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fetch, offscreen, fast=True,
-            flat=None):
+            flat=None, cells=None):
     """The ball VO from the view-ray segments of the ``unit`` square points (each uniform)
     (:mod:`vobscure.screenspace._segment`), toroidally shifted per pixel by a tiled
     64 x 64 texture of uniform shifts. Pixels whose ball reaches the eye's plane z = 0
     (perspective) are point sampled instead, with as many points. ``fast``: the kernel of
-    :mod:`vobscure.screenspace._segment_fast` (the same values within float64 rounding);
-    False: the plain ``_segment.ray_kernel``. ``flat``: None or the (H, W) bool image of
-    :func:`_exact_pixels` (the pixels whose rays all read their own plane), which take the
-    value the kernel returns there, 1/2 (1 with ``normal_clamp``), without integrating their
-    segments."""
+    :mod:`vobscure.screenspace._segment_fast` (the same values within float64 rounding), its
+    chunks on threads; False: the plain ``_segment.ray_kernel``, one chunk after another.
+    ``flat``: None or the (H, W) bool image of :func:`_exact_pixels` (the pixels whose rays all
+    read their own plane), which take the value the kernel returns there, 1/2 (1 with
+    ``normal_clamp``), without integrating their segments. ``cells``: the
+    :class:`~vobscure.screenspace._segment_fast.DepthCells` of the image when the caller has
+    them (they do not depend on the rays)."""
     C.as_gbuffer(gbuffer)
     radius = C.check_positive(radius, "radius")
     thickness = C.check_common(fetch=fetch, offscreen=offscreen, falloff=falloff, thickness=thickness)
     texture = rng.random((64, 64, 2))
-    fallback = {}
-    cells = {}
+    # drawn before the chunks run (on threads, in any order), whether or not a ball reaches z = 0
+    half = max(1, len(unit) // 2)
+    pts = cube_to_uniform_ball(np.column_stack([unit[:half], rng.random(half)]))
+    fallback = dict(pattern=SamplePattern(np.vstack([pts, -pts]), np.ones(2 * half)),
+                    texture=C.noise_texture(64, rng, 3, True))
+    gb, depth64, index = C.frame(gbuffer, radius)
+    if fast and fetch == "bilinear" and cells is None:
+        cells = DepthCells(depth64.reshape(gb.depth.shape), gb.camera.is_perspective)
 
     def segments(px):
         shift = C.noise_at(px, texture)
         if fast:
-            if not cells:
-                cells["depth"] = DepthCells(px.depth, px.perspective) if fetch == "bilinear" else None
             v, exact = segment_kernel(px, radius=radius, unit=unit, normal_clamp=normal_clamp, thickness=thickness,
-                                      falloff=falloff, cells=cells["depth"], offscreen=offscreen, shift=shift)
+                                      falloff=falloff, cells=cells if fetch == "bilinear" else None,
+                                      offscreen=offscreen, shift=shift)
         else:
             v, exact = ray_kernel(px, radius=radius, unit=unit, normal_clamp=normal_clamp, thickness=thickness,
                                   falloff=falloff, fetch=fetch, offscreen=offscreen, shift=shift)
         if not exact.all():
-            if not fallback:
-                # stratified in the ball with antithetic partners, as the point path
-                half = max(1, len(unit) // 2)
-                pts = cube_to_uniform_ball(np.column_stack([unit[:half], rng.random(half)]))
-                fallback.update(pattern=SamplePattern(np.vstack([pts, -pts]), np.ones(2 * half)),
-                                texture=C.noise_texture(64, rng, 3, True))
-            sub = C.prepare(gbuffer, radius, index=px.index[~exact], depth64=px.depth_flat)
+            sub = C.prepare(gb, radius, index=px.index[~exact], depth64=depth64)
             v[~exact] = _point_kernel(sub, radius=radius, pattern=fallback["pattern"], normal_clamp=normal_clamp,
                                       thickness=thickness, falloff=falloff, fetch=fetch, offscreen=offscreen,
                                       texture=fallback["texture"])
         return v
 
-    def kernel(px):
-        if flat is None:
-            return segments(px)
-        mine = flat.reshape(-1)[px.index]
-        if not mine.any():
-            return segments(px)
-        v = np.full(len(px.index), 1.0 if normal_clamp else 0.5)
-        if not mine.all():
-            v[~mine] = segments(C.prepare(gbuffer, radius, index=px.index[~mine], depth64=px.depth_flat))
-        return v
-    return C.run_chunks(gbuffer, radius, kernel, np.dtype(np.float64), chunk=SEGMENT_CHUNK_PIXELS if fast else C.CHUNK_PIXELS)
+    if flat is not None:
+        # the exact pixels take the closed form; only the others are integrated
+        index = index[~flat.reshape(-1)[index]]
+    chunk = SEGMENT_CHUNK_PIXELS if fast else C.CHUNK_PIXELS
+    parts = [index[a:a + chunk] for a in range(0, len(index), chunk)]
+
+    def run(ix):
+        return segments(C.prepare(gb, radius, index=ix, depth64=depth64))
+    H, W = gb.depth.shape
+    out = np.full(H * W, np.nan)
+    if flat is not None:
+        out[flat.reshape(-1)] = 1.0 if normal_clamp else 0.5
+    for ix, v in zip(parts, parallel_chunks(run, parts) if fast else [run(ix) for ix in parts]):
+        out[ix] = v
+    return out.reshape(H, W)
 
 
 def _plane_tables(gbuffer, *, thickness, fetch):
@@ -101,12 +106,20 @@ def _plane_tables(gbuffer, *, thickness, fetch):
     return None if labels is None else PlaneTables(labels, gbuffer.depth)
 
 
-def _exact_pixels(gbuffer, radius, tables: PlaneTables) -> np.ndarray:
+def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp") -> np.ndarray:
     """(H, W) bool: the pixels of :func:`vobscure.screenspace._segment.on_one_plane` (every
     view ray through the ball reads the pixel's own plane, or a depth that lies with the
     plane's beyond the ball's depth range), whose reference value is exact."""
-    flat = C.run_chunks(gbuffer, radius, lambda px: on_one_plane(px, radius, tables), np.dtype(np.float64))
-    return flat == 1.0
+    gb, depth64, index = C.frame(gbuffer, radius)
+    parts = [index[a:a + C.CHUNK_PIXELS] for a in range(0, len(index), C.CHUNK_PIXELS)]
+
+    def run(ix):
+        return on_one_plane(C.prepare(gb, radius, index=ix, depth64=depth64), radius, tables, offscreen=offscreen)
+    flat = np.zeros(gb.depth.size, dtype=bool)
+    # on threads (NumPy releases the GIL in its loops); each chunk's pixels are its own
+    for ix, ok in zip(parts, parallel_chunks(run, parts)):
+        flat[ix] = ok
+    return flat.reshape(gb.depth.shape)
 
 
 def _is_centre(s) -> bool:
@@ -505,38 +518,63 @@ LATTICE_WINDOW = 256
 
 @lru_cache(maxsize=64)
 def lattice_generator(n: int) -> int:
-    """The generator z of the rank-1 lattice {(i / n, frac(i z / n)), i = 0..n-1} whose
-    points lie farthest apart on the torus (the largest shortest nonzero lattice vector,
-    toroidal Euclidean length), among the z coprime to n: all of them up to
+    """The generator z of the rank-1 lattice {(i / n, frac(i z / n)), i = 0..n-1} with the
+    least figure of merit P_2 among the z coprime to n (all of them up to
     :data:`LATTICE_FULL_SEARCH` points, else :data:`LATTICE_WINDOW` on each side of
-    n / golden ratio (the generator F_(k-1) of the Fibonacci lattice of n = F_k points lies
-    there). The first best z wins ties.
+    n / golden ratio, where the Fibonacci lattice's generator lies); ties go to the smallest z
+    (z and n - z always tie: one lattice mirrored).
+
+    P_2 = sum over the nonzero dual vectors h (h_1 + z h_2 = 0 mod n) of
+    1 / (max(1, |h_1|) max(1, |h_2|))^2: the squared worst-case error of the rule for periodic
+    integrands whose Fourier coefficients fall as that product, and the mean squared error of
+    the randomly shifted rule there. It is a product over the axes, so it does not change when
+    one axis of the integrand is stretched (each pixel's box of rays maps to the unit square with
+    its own aspect ratio); the shortest lattice vector does, and ranked generators whose
+    lattices are nearly square with short dual vectors along the axes first (n = 48: z = 7, P_2
+    0.105, against z = 11, 0.060; ``docs/screenspace.md``, "The converged reference").
+
+    References
+    ----------
+    Sloan & Joe, "Lattice Methods for Multiple Integration", Oxford 1994, Ch. 4 and 5 (P_alpha,
+    and for even alpha its closed form through the Bernoulli polynomial: with B_2(x) =
+    x^2 - x + 1/6, P_2 = -1 + (1/n) sum_k prod_j (1 + 2 pi^2 B_2(frac(k z_j / n)))).
 
     Examples
     --------
-    For 89 = F_11 points the best is 34 = 89 - F_10, the Fibonacci lattice reflected:
+    For 89 = F_11 points the best is 34 = F_9, the Fibonacci lattice:
 
-    >>> lattice_generator(89), lattice_generator(100)
-    (34, 9)
+    >>> lattice_generator(89), lattice_generator(48)
+    (34, 11)
     """
     n = int(n)
     if n <= 2:
         return 1
     if n <= LATTICE_FULL_SEARCH:
-        candidates = np.arange(1, n)
+        candidates = np.arange(1, n // 2 + 1)
     else:
         g = int(round(n / ((1.0 + np.sqrt(5.0)) / 2.0)))
         candidates = np.arange(max(1, g - LATTICE_WINDOW), min(n, g + LATTICE_WINDOW + 1))
     candidates = candidates[np.gcd(candidates, n) == 1]
-    i = np.arange(1, n)
-    x = np.minimum(i, n - i).astype(np.float64) ** 2
-    best, best_z = -1.0, 1
-    for z in candidates.tolist():
-        y = (i * z) % n
-        d = float(np.min(x + np.minimum(y, n - y).astype(np.float64) ** 2))
-        if d > best:
-            best, best_z = d, z
-    return best_z
+    return int(candidates[np.argmin(lattice_merit(n, candidates))])
+
+
+def lattice_merit(n: int, z) -> np.ndarray:
+    """P_2 of the rank-1 lattices of n points with the generators ``z`` (:func:`lattice_generator`),
+    from the closed form -1 + (1/n) sum_k (1 + 2 pi^2 B_2(k / n)) (1 + 2 pi^2 B_2(frac(k z / n))),
+    rounded to 12 significant digits (the ranking must not hang on the summation's rounding)."""
+    k = np.arange(n)
+
+    def factor(j):
+        x = j / n
+        # Sloan & Joe 1994, Ch. 5: sum over h != 0 of exp(2 pi i h x) / h^2 = 2 pi^2 B_2(x)
+        return 1.0 + 2.0 * np.pi ** 2 * (x * x - x + 1.0 / 6.0)
+    z = np.atleast_1d(np.asarray(z, dtype=np.int64))
+    out = np.empty(len(z))
+    first = factor(k)
+    for a in range(0, len(z), 256):
+        rows = factor(np.outer(z[a:a + 256], k) % n)
+        out[a:a + 256] = rows @ first / n - 1.0
+    return np.array([float(f"{v:.12g}") for v in out])
 
 
 def _lattice_square(rng, n: int) -> np.ndarray:
@@ -592,7 +630,11 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
         total = g * len(pattern.points)
     tables = _plane_tables(gbuffer, thickness=thickness, fetch=fetch) if pattern is None and along == "segment" else None
     # found once per image, for every group
-    exact = None if tables is None else _exact_pixels(gbuffer, radius, tables)
+    exact = None if tables is None else _exact_pixels(gbuffer, radius, tables, offscreen)
+    depth_cells = None
+    if pattern is None and along == "segment" and fast and fetch == "bilinear":
+        gb, depth64, _ = C.frame(gbuffer, radius)
+        depth_cells = DepthCells(depth64.reshape(gb.depth.shape), gb.camera.is_perspective)
     mean = M2 = None
     for k in tqdm(range(1, g + 1), desc="vo_reference", unit="group", disable=not progress, leave=False):
         if pattern is None and along == "point":
@@ -606,7 +648,7 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
             unit = (_lattice_square if lattice else _stratified_square)(rng, total // g)
             x = _ray_vo(gbuffer, radius=radius, unit=unit, normal_clamp=normal_clamp,
                         thickness=thickness, falloff=falloff, rng=rng, fetch=fetch, offscreen=offscreen,
-                        fast=fast, flat=exact if shortcut else None)
+                        fast=fast, flat=exact if shortcut else None, cells=depth_cells)
         else:
             group_pattern = pattern if pattern is not None else SamplePattern(
                 points, np.ones(2 * half), method="stratified",
