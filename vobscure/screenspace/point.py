@@ -106,15 +106,21 @@ def _plane_tables(gbuffer, *, thickness, fetch):
     return None if labels is None else PlaneTables(labels, gbuffer.depth)
 
 
-def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp") -> np.ndarray:
+def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp", *, clear: bool = True,
+                  candidates=None) -> np.ndarray:
     """(H, W) bool: the pixels of :func:`vobscure.screenspace._segment.on_one_plane` (every
-    view ray through the ball reads the pixel's own plane, or a depth that lies with the
-    plane's beyond the ball's depth range), whose reference value is exact."""
+    view ray through the ball reads the pixel's own plane, or, with ``clear``, a depth that lies
+    with the plane's beyond the ball's depth range), whose reference value is exact.
+    ``candidates``: an (H, W) bool image of the only pixels to examine (the others are not
+    exact), else every covered pixel."""
     gb, depth64, index = C.frame(gbuffer, radius)
+    if candidates is not None:
+        index = index[candidates.reshape(-1)[index]]
     parts = [index[a:a + C.CHUNK_PIXELS] for a in range(0, len(index), C.CHUNK_PIXELS)]
 
     def run(ix):
-        return on_one_plane(C.prepare(gb, radius, index=ix, depth64=depth64), radius, tables, offscreen=offscreen)
+        px = C.prepare(gb, radius, index=ix, depth64=depth64)
+        return on_one_plane(px, radius, tables, clear=clear, offscreen=offscreen)
     flat = np.zeros(gb.depth.size, dtype=bool)
     # on threads (NumPy releases the GIL in its loops); each chunk's pixels are its own
     for ix, ok in zip(parts, parallel_chunks(run, parts)):
@@ -629,8 +635,10 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
     else:
         total = g * len(pattern.points)
     tables = _plane_tables(gbuffer, thickness=thickness, fetch=fetch) if pattern is None and along == "segment" else None
-    # found once per image, for every group
-    exact = None if tables is None else _exact_pixels(gbuffer, radius, tables, offscreen)
+    # found once per image, for every group: first the pixels whose footprint reads their own
+    # plane only (a cheap test of every pixel), after the first group the others
+    exact = None if tables is None else _exact_pixels(gbuffer, radius, tables, offscreen, clear=False)
+    closed_form = 1.0 if normal_clamp else 0.5
     depth_cells = None
     if pattern is None and along == "segment" and fast and fetch == "bilinear":
         gb, depth64, _ = C.frame(gbuffer, radius)
@@ -656,6 +664,14 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
             x = _point_vo(gbuffer, radius=radius, pattern=group_pattern, normal_clamp=normal_clamp,
                           thickness=thickness, falloff=falloff, randomize=True, seed=rng, fetch=fetch,
                           offscreen=offscreen, noise_size=64).astype(np.float64)
+        if k == 1 and exact is not None:
+            # An exact pixel's every ray adds exactly 0 to the control variate's difference, so
+            # its first group reads the closed form bit for bit (tests/test_screen_reference_exact.py):
+            # only those pixels can be exact, and only they are given the costlier test of the
+            # other surfaces in their footprint (the same set as testing every pixel).
+            candidates = (x == closed_form) & ~exact
+            if candidates.any():
+                exact = exact | _exact_pixels(gbuffer, radius, tables, offscreen, candidates=candidates)
         # Welford's running mean and sum of squared deviations of the group means
         if mean is None:
             mean, M2 = x, np.zeros_like(x)
