@@ -236,11 +236,12 @@ RAYCAST_THREAD = 6 << 20
 #: with their inside votes (measured 267-277 B a pixel + 65-68 MB on 2 threads).
 VOLUME_PIXEL = 280
 VOLUME_THREAD = 36 << 20
-#: The converged screen-space VO (vo_reference at its default 464 segments, with the exact
-#: pixels' plane tables and depth pyramids): measured peaks 2.7, 9.0, 24.4, 43.7 and 92.3 MB at
-#: 48^2, 80^2, 128^2, 256^2 and 400^2 (tracemalloc, Cornell box): about 515 B a pixel beyond 256^2
-#: plus a part that grows with the segment chunks up to their cap; 600 B a pixel + 20 MB covers
-#: every size measured (1.2-8x).
+#: The converged screen-space VO (vo_reference at its default 448 segments, with the exact
+#: pixels' plane tables, depth pyramids and the tests of their candidates in chunks of 512
+#: pixels): measured peaks 3.6, 17.9, 37.1, 75.4 and 181.8 MB at 48^2, 128^2, 256^2, 400^2 and
+#: 1280 x 720 (tracemalloc, Cornell box, compare's radius and twice it): at most 1.6 KB a pixel
+#: at 48^2, under 600 B a pixel from 256^2; 600 B a pixel + 20 MB covers every size measured
+#: (1.5-6x).
 SCREEN_REFERENCE_PIXEL = 600
 SCREEN_REFERENCE_FIXED = 20 << 20
 #: The largest screen-space estimator's peak (gtao, vbao, point:33, area: 16-41 B a pixel

@@ -48,11 +48,11 @@ SAMPLE_PARAMETERS = {"rays": "rays", "volume_samples": "samples", "screen_sample
 SHELL_THICKNESS = 1.0
 
 #: View-ray segments per pixel of the ``screen`` reference by default (:func:`vobscure.vo_reference`
-#: in ``vobscure compare`` and sweeps): 8 groups of a randomly shifted 58-point lattice, the
+#: in ``vobscure compare`` and sweeps): 8 groups of a randomly shifted 56-point lattice, the
 #: fewest tried whose reported standard error is below that of the 800 jittered rays it
 #: replaced (and of 2048 stratified points of the ball) on the atrium's and the Cornell box's
 #: views (mean, RMS and 95th percentile; ``docs/screenspace.md``, "The converged reference").
-SCREEN_SAMPLES = 464
+SCREEN_SAMPLES = 448
 #: The estimate's options a reference may share with it (passed on under the same name).
 _SHARED_OPTIONS = ("normal_clamp", "thickness", "falloff", "allow_open")
 

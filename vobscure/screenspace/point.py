@@ -106,6 +106,11 @@ def _plane_tables(gbuffer, *, thickness, fetch):
     return None if labels is None else PlaneTables(labels, gbuffer.depth)
 
 
+#: Pixels per chunk of :func:`_exact_pixels`' tests of other surfaces and of the image's edge
+#: (the plane-only test takes the estimators' chunks).
+EXACT_CHUNK_PIXELS = 512
+
+
 def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp", *, clear: bool = True,
                   candidates=None) -> np.ndarray:
     """(H, W) bool: the pixels of :func:`vobscure.screenspace._segment.on_one_plane` (every
@@ -116,7 +121,10 @@ def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp"
     gb, depth64, index = C.frame(gbuffer, radius)
     if candidates is not None:
         index = index[candidates.reshape(-1)[index]]
-    parts = [index[a:a + C.CHUNK_PIXELS] for a in range(0, len(index), C.CHUNK_PIXELS)]
+    # the tests of other surfaces hold a row per box of texels per pixel (thousands for a large
+    # footprint): smaller chunks keep their memory near the plane-only test's
+    chunk = C.CHUNK_PIXELS if not clear else EXACT_CHUNK_PIXELS
+    parts = [index[a:a + chunk] for a in range(0, len(index), chunk)]
 
     def run(ix):
         px = C.prepare(gb, radius, index=ix, depth64=depth64)
