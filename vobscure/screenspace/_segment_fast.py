@@ -56,6 +56,24 @@ def parallel_chunks(fn, items) -> list:
     return list(_POOL[0].map(fn, items))
 
 
+def balanced_parts(index: np.ndarray, chunk: int) -> list[np.ndarray]:
+    """``index`` cut into parts of at most ``chunk`` items, of equal sizes (within one) and as
+    many as the threads of :func:`parallel_chunks` or a multiple of them, so that no thread
+    idles while another finishes a last part (11 chunks of 65536 on 2 threads left one
+    thread a chunk's time with nothing to do).
+
+    Examples
+    --------
+    >>> [len(p) for p in balanced_parts(np.arange(10), 4)] in ([4, 3, 3], [3, 3, 2, 2])
+    True
+    """
+    threads = _threads()
+    count = -(-len(index) // max(1, int(chunk)))
+    count = max(threads, -(-count // threads) * threads)
+    bounds = np.linspace(0, len(index), count + 1).round().astype(np.intp)
+    return [index[a:b] for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+
 class DepthCells:
     """Per-cell bilinear data of a depth image, built once per image.
 
@@ -103,12 +121,14 @@ class DepthCells:
         self.coef = coef.reshape(H * W, 4).astype(np.float32)
         self.any_background = not ok.all()
 
-    def fetch(self, fx: np.ndarray, fy: np.ndarray, offscreen: str, inside: bool = False) -> np.ndarray:
+    def fetch(self, fx: np.ndarray, fy: np.ndarray, offscreen: str, inside: bool = False,
+              single: bool = False) -> np.ndarray:
         """Bilinear depth at the finite pixel coordinates (fx + 1/2, fy + 1/2), as
         ``fetch_depth(..., fetch="bilinear")`` with this image's ``reciprocal``. ``fx`` and
-        ``fy`` (the coordinates relative to the first pixel centre) are overwritten. ``inside``:
-        the caller knows every coordinate lies within [0, W - 1] x [0, H - 1] (nothing to
-        clamp)."""
+        ``fy`` (the coordinates relative to the first pixel centre, float64) are overwritten.
+        ``inside``: the caller knows every coordinate lies within [0, W - 1] x [0, H - 1]
+        (nothing to clamp). ``single``: float32 depths (the reciprocal taken in float32, one
+        rounding more), else float64."""
         H, W = self.shape
         if not inside:
             if offscreen == "open":
@@ -133,11 +153,14 @@ class DepthCells:
         np.multiply(c[:, 2], ty, out=ty)
         v += ty
         v += c[:, 0]
-        d = j0
-        d[...] = v
+        if single:
+            d = v
+        else:
+            d = j0
+            d[...] = v
         with np.errstate(divide="ignore", invalid="ignore"):
             if self.reciprocal:
-                np.divide(1.0, d, out=d)
+                np.divide(d.dtype.type(1.0), d, out=d)
         if self.any_background and np.isnan(np.add.reduce(d)):
             # a background corner (NaN coefficients): the nearest pixel's depth, the cell's
             # corner nearest to (x, y) = (fx + 1/2, fy + 1/2) (at a clamped edge t is 0 and
@@ -288,6 +311,8 @@ def _block(px, sel, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, c
     m = len(a0)
     # the default options: the segment's terms from its ends' depths (_depth_terms)
     simple = thickness is None and not normal_clamp and not quadratic
+    if simple and persp and cells is not None and finite:
+        return _simple_perspective(px, pc, nc, n_p, a0, da, b0, db, R, unit, cells, offscreen, s1, s2, inside)
     acc = np.zeros(m)
     F_lo, F_b, tmp = np.empty(m), np.empty(m), np.empty(m)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -410,4 +435,117 @@ def _block(px, sel, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, c
     if normal_clamp:
         return 1.0 - scale * acc / (0.5 * mass)
     # control variate: its scaled mean is mass / 2 exactly (_segment.ray_kernel)
+    return 0.5 - scale * acc / mass
+
+
+def _cube_difference(x, y):
+    """x^3 - y^3 as (x - y)(x^2 + x y + y^2): rounded relative to the difference itself (the
+    difference of the cubes would be rounded relative to x^3)."""
+    s = x * x
+    s += x * y
+    s += y * y
+    s *= x - y
+    return s
+
+
+def _simple_perspective(px, pc, nc, n_p, a0, da, b0, db, R, unit, cells, offscreen, s1, s2, inside):
+    """The V of :func:`_block` for the default options (constant falloff, the whole ball, no
+    thickness) under perspective with the bilinear depth of ``cells``: each ray's terms as in
+    :func:`_depth_terms`, with the chord, the tangent plane and the terms in float32 (the ray's
+    pixel position stays float64, so that the fetched depth and the plane's along the ray meet
+    the ray at the same place). A term is rounded relative to itself (cube differences in
+    factored form; the chord's half-length from |u x p|, which does not cancel as
+    |u|^2 |p|^2 - (u . p)^2 does); the sum is float64. The difference from the float64 kernel
+    is under SINGLE_ROUNDING z / R of a value (``tests/test_screen_reference.py``). A depth on
+    the tangent plane (within :data:`PLANE_RTOL`) adds exactly 0, as in :func:`_depth_terms`:
+    the selection multiplies by 0 and 1, exact for the finite, clipped ends (a NaN depth
+    gives a NaN term, set to 0 as in :func:`_block`)."""
+    f4 = np.float32
+    p0, p1, p2 = (q.astype(f4) for q in pc)
+    n0, n1, n2 = (q.astype(f4) for q in nc)
+    n_p = n_p.astype(f4)
+    RR = f4(R * R)
+    rtol = f4(PLANE_RTOL)
+    one, zero = f4(1.0), f4(0.0)
+    # the ray's pixel position fx = fx0 + u_a fxa, fy = fy0 - u_b fyb (float64)
+    fxa = px.fx * da
+    fx0 = px.fx * a0 + (px.cx - 0.5)
+    fyb = px.fy * db
+    fy0 = (px.cy - 0.5) - px.fy * b0
+    # (the box's area over the rays, float64: _depth_terms' 3 int z^2 dz)
+    scale = (da * db) / len(unit) / 3.0
+    a0, da, b0, db = (q.astype(f4) for q in (a0, da, b0, db))
+    acc = np.zeros(len(a0))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for u1, u2 in unit:
+            ua = u1 + s1
+            ua -= np.floor(ua)
+            ub = u2 + s2
+            ub -= np.floor(ub)
+            fx = ua * fxa
+            fx += fx0
+            fy = ub * fyb
+            np.subtract(fy0, fy, out=fy)
+            d = cells.fetch(fx, fy, offscreen, inside, single=True)
+            a = ua.astype(f4)
+            a *= da
+            a += a0
+            b = ub.astype(f4)
+            b *= db
+            b += b0
+            # the ray u = (a, b, 1) meets the ball |z u - p| <= R for z in z_m -+ h:
+            # z_m = u.p / |u|^2, h = sqrt(R^2 |u|^2 - |u x p|^2) / |u|^2
+            uu = a * a
+            uu += b * b
+            uu += one
+            z_m = a * p0
+            z_m += b * p1
+            z_m += p2
+            z_m /= uu
+            t = b * p2
+            t -= p1
+            cross = t * t
+            np.multiply(a, p2, out=t)
+            np.subtract(p0, t, out=t)
+            t *= t
+            cross += t
+            np.multiply(a, p1, out=t)
+            t -= b * p0
+            t *= t
+            cross += t
+            h = RR * uu
+            h -= cross
+            np.maximum(h, zero, out=h)
+            np.sqrt(h, out=h)
+            h /= uu
+            # the tangent plane n . (X - p) = 0 meets the ray at depth n.p / n.u
+            # (Loos & Sloan 2010, Sec. 4.4)
+            c1 = a * n0
+            c1 += b * n1
+            c1 += n2
+            zp = np.divide(n_p, c1, out=t)
+            away = c1 > 0          # the half-ball lies beyond the plane along the ray
+            z_lo = z_m - h
+            z_hi = np.add(z_m, h, out=h)
+            zc = np.minimum(np.maximum(zp, z_lo), z_hi)
+            zl = np.minimum(np.maximum(d, z_lo), z_hi)
+            q = np.subtract(d, zp, out=zp)
+            np.abs(q, out=q)
+            # (< rather than <=: a background d = inf is not on the plane); on the plane the
+            # occupied part starts where the plane does: zl = zc there, selected by products
+            # with 0 and 1 (exact for these finite, clipped ends; faster than a masked copy)
+            on = np.less(q, rtol * d).view(np.uint8).astype(f4)
+            zl *= one - on
+            on *= zc
+            zl += on
+            # Sec. 4.4: zc^3 - zl^3, or (z_hi^3 - zc^3) - (zl^3 - z_lo^3) where away
+            contrib = _cube_difference(zc, zl)
+            if away.any():
+                other = _cube_difference(z_hi, zc)
+                other -= _cube_difference(zl, z_lo)
+                contrib = np.where(away, other, contrib)
+            if not np.isfinite(np.add.reduce(contrib)):
+                contrib[~np.isfinite(contrib)] = 0.0
+            acc += contrib
+    mass = BALL_MASS["constant"] * R ** 3
     return 0.5 - scale * acc / mass

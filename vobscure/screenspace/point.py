@@ -18,7 +18,7 @@ from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
 from ._segment import PlaneTables, on_one_plane, plane_labels, ray_kernel
-from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS, DepthCells, parallel_chunks, segment_kernel
+from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS, DepthCells, balanced_parts, parallel_chunks, segment_kernel
 
 __all__ = ["vo_point", "vo_reference", "point_taps"]
 
@@ -83,8 +83,10 @@ def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fet
     if flat is not None:
         # the exact pixels take the closed form; only the others are integrated
         index = index[~flat.reshape(-1)[index]]
-    chunk = SEGMENT_CHUNK_PIXELS if fast else C.CHUNK_PIXELS
-    parts = [index[a:a + chunk] for a in range(0, len(index), chunk)]
+    if fast:
+        parts = balanced_parts(index, SEGMENT_CHUNK_PIXELS)
+    else:
+        parts = [index[a:a + C.CHUNK_PIXELS] for a in range(0, len(index), C.CHUNK_PIXELS)]
 
     def run(ix):
         return segments(C.prepare(gb, radius, index=ix, depth64=depth64))
@@ -107,8 +109,12 @@ def _plane_tables(gbuffer, *, thickness, fetch):
 
 
 #: Pixels per chunk of :func:`_exact_pixels`' tests of other surfaces and of the image's edge
-#: (the plane-only test takes the estimators' chunks).
-EXACT_CHUNK_PIXELS = 512
+#: (the plane-only test takes the estimators' chunks). Those tests run many small NumPy calls
+#: per chunk, so a chunk of 512 pixels spent most of its time in the calls' overhead: the
+#: candidates' test of ``vo_reference`` at 1280 x 720 took 3.4-3.7 s on the Cornell box and
+#: 6.4-8.7 s on the atrium with 512, 1.0-1.1 s and 1.4-1.5 s with 4096, 0.9-1.0 s with 16384
+#: (the same pixels found). Peak memory of the whole reference with 4096: docs/screenspace.md.
+EXACT_CHUNK_PIXELS = 4096
 
 
 def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp", *, clear: bool = True,
@@ -672,13 +678,18 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
             x = _point_vo(gbuffer, radius=radius, pattern=group_pattern, normal_clamp=normal_clamp,
                           thickness=thickness, falloff=falloff, randomize=True, seed=rng, fetch=fetch,
                           offscreen=offscreen, noise_size=64).astype(np.float64)
-        if k == 1 and exact is not None:
+        if k <= 2 and exact is not None:
             # An exact pixel's every ray adds exactly 0 to the control variate's difference, so
-            # its first group reads the closed form bit for bit (tests/test_screen_reference_exact.py):
-            # only those pixels can be exact, and only they are given the costlier test of the
-            # other surfaces in their footprint (the same set as testing every pixel).
-            candidates = (x == closed_form) & ~exact
-            if candidates.any():
+            # each of its groups reads the closed form bit for bit (tests/test_screen_reference_exact.py):
+            # only the pixels whose first two groups read it can be exact, and only they are
+            # given the costlier test of the other surfaces in their footprint (the same set as
+            # testing every pixel; after two groups rather than one, since a test costs several
+            # groups' rays of a pixel and the second group rules out about a third of the
+            # pixels the first leaves)
+            closed = x == closed_form
+            if k == 1:
+                first = closed
+            elif (candidates := first & closed & ~exact).any():
                 exact = exact | _exact_pixels(gbuffer, radius, tables, offscreen, candidates=candidates)
         # Welford's running mean and sum of squared deviations of the group means
         if mean is None:
