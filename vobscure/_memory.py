@@ -241,7 +241,9 @@ VOLUME_THREAD = 36 << 20
 #: pixels): measured peaks 3.6, 17.9, 37.1, 75.4 and 181.8 MB at 48^2, 128^2, 256^2, 400^2 and
 #: 1280 x 720 (tracemalloc, Cornell box, compare's radius and twice it): at most 1.6 KB a pixel
 #: at 48^2, under 600 B a pixel from 256^2; 600 B a pixel + 20 MB covers every size measured
-#: (1.5-6x).
+#: (1.5-6x). With the candidates' tests in chunks of 4096 pixels and the float32 kernel's four
+#: rays at once, 1280 x 720: 237 and 248 MB inside the Cornell box, 230 and 253 MB inside the
+#: atrium, at compare's radius and twice it (tracemalloc): the model is 2.3-2.5x above.
 SCREEN_REFERENCE_PIXEL = 600
 SCREEN_REFERENCE_FIXED = 20 << 20
 #: The largest screen-space estimator's peak (gtao, vbao, point:33, area: 16-41 B a pixel

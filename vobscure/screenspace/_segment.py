@@ -753,7 +753,13 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
         # the part in the image: the rays that land there read its cells
         c0, c1 = np.clip(x0, 0, W - 1), np.clip(x1, 0, W - 1)
         r0, r1 = np.clip(y0, 0, H - 1), np.clip(y1, 0, H - 1)
-        one = tables.one_label(label, r0, r1, c0, c1)
+        if clear and tables.near9 is not None:
+            one = tables.one_label(label, r0, r1, c0, c1)
+        else:
+            # the plane-only test: only the pixels still in it need this strip's rectangle
+            one = np.zeros(len(label), dtype=bool)
+            live = np.flatnonzero(inside & plane)
+            one[live] = tables.one_label(label[live], r0[live], r1[live], c0[live], c1[live])
         plane &= one
         rects.append((c0, c1, r0, r1, one))
         overflow.append((x0, x1, y0, y1, out & inside))
