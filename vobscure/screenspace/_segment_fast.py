@@ -2,8 +2,9 @@
 
 It computes what :func:`vobscure.screenspace._segment.ray_kernel` computes (the same rays,
 the same depth-buffer occupancy, the same closed forms; ``docs/screenspace.md``, "The
-converged reference"), equal to it within float64 rounding (``tests/test_screen_reference.py``
-compares the two), restructured for speed:
+converged reference"), equal to it within the rounding of the float32 steps below (a
+tolerance derived in ``tests/test_screen_reference.py``, which compares the two), restructured
+for speed:
 
 - the depth fetch reads one precomputed row per bilinear cell (:class:`DepthCells`: the
   cell's interpolant as a bilinear polynomial, and whether its four corners are all
@@ -14,7 +15,9 @@ compares the two), restructured for speed:
   even part F(h) + F(-h) where the half-ball lies beyond the plane);
 - the arithmetic is in place where it can be, and the pixels of a chunk are split into
   blocks computed on a thread pool (NumPy releases the GIL in its loops); every operation
-  is per pixel, so the blocks do not change the values.
+  is per pixel, so the blocks do not change the values;
+- with the default options under perspective (``vobscure compare``'s case) the chord, the
+  tangent plane and the terms are float32, four rays at a time (:func:`_simple_perspective`).
 """
 
 from __future__ import annotations
@@ -70,8 +73,9 @@ def balanced_parts(index: np.ndarray, chunk: int) -> list[np.ndarray]:
 
     Examples
     --------
-    >>> [len(p) for p in balanced_parts(np.arange(10), 4)] in ([4, 3, 3], [3, 3, 2, 2])
-    True
+    >>> sizes = [len(p) for p in balanced_parts(np.arange(10), 4)]   # 3 or 4 parts, by the threads
+    >>> sum(sizes), max(sizes) <= 4, max(sizes) - min(sizes) <= 1
+    (10, True, True)
     """
     threads = _threads()
     count = -(-len(index) // max(1, int(chunk)))
@@ -273,7 +277,7 @@ def _even(z_m, h2, perspective, quadratic):
 def segment_kernel(px, *, radius, unit, normal_clamp, thickness, falloff, cells, offscreen, shift):
     """:func:`vobscure.screenspace._segment.ray_kernel` with the bilinear depth of ``cells``
     (a :class:`DepthCells` of ``px.depth``; None: ``fetch="nearest"``): the same ((k,) V,
-    (k,) exact) within float64 rounding."""
+    (k,) exact) within the rounding of its float32 steps (see the module)."""
     R = float(radius)
     a0, a1, b0, b1, exact = ball_box(px, R)
     H, W = px.shape
@@ -460,9 +464,10 @@ def _simple_perspective(px, pc, nc, n_p, a0, da, b0, db, R, unit, cells, offscre
     :func:`_depth_terms`, with the chord, the tangent plane and the terms in float32 (the ray's
     pixel position stays float64, so that the fetched depth and the plane's along the ray meet
     the ray at the same place). A term is rounded relative to itself (cube differences in
-    factored form; the chord's half-length from |u x p|, which does not cancel as
-    |u|^2 |p|^2 - (u . p)^2 does); the sum is float64. The difference from the float64 kernel
-    is under SINGLE_ROUNDING z / R of a value (``tests/test_screen_reference.py``). A depth on
+    factored form; the chord's half-length from |u x p|, equal by Lagrange's identity to
+    |u|^2 |p|^2 - (u . p)^2, which cancels); the sum is float64. The difference from the float64
+    kernel stays within the tolerance derived in ``tests/test_screen_reference.py`` (a few
+    float32 ulps of the chord's ends, times z^2 and the box's area over the ball's weight). A depth on
     the tangent plane (within :data:`PLANE_RTOL`) adds exactly 0, as in :func:`_depth_terms`:
     the selection multiplies by 0 and 1, exact for the finite, clipped ends (a NaN depth
     gives a NaN term, set to 0 as in :func:`_block`)."""

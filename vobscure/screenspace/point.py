@@ -18,7 +18,8 @@ from ..camera.kernel import project_xy
 from ..sampling import cube_to_uniform_ball
 from . import _common as C
 from ._segment import PlaneTables, on_one_plane, plane_labels, ray_kernel
-from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS, DepthCells, balanced_parts, parallel_chunks, segment_kernel
+from ._segment_fast import CHUNK_PIXELS as SEGMENT_CHUNK_PIXELS
+from ._segment_fast import DepthCells, balanced_parts, parallel_chunks, segment_kernel
 
 __all__ = ["vo_point", "vo_reference", "point_taps"]
 
@@ -44,8 +45,9 @@ def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fet
     (:mod:`vobscure.screenspace._segment`), toroidally shifted per pixel by a tiled
     64 x 64 texture of uniform shifts. Pixels whose ball reaches the eye's plane z = 0
     (perspective) are point sampled instead, with as many points. ``fast``: the kernel of
-    :mod:`vobscure.screenspace._segment_fast` (the same values within float64 rounding), its
-    chunks on threads; False: the plain ``_segment.ray_kernel``, one chunk after another.
+    :mod:`vobscure.screenspace._segment_fast` (the same values within the rounding of its
+    float32 steps), its chunks on threads; False: the plain ``_segment.ray_kernel``, one chunk
+    after another.
     ``flat``: None or the (H, W) bool image of :func:`_exact_pixels` (the pixels whose rays all
     read their own plane), which take the value the kernel returns there, 1/2 (1 with
     ``normal_clamp``), without integrating their segments. ``cells``: the
