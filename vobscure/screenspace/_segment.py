@@ -347,7 +347,10 @@ class _RangeBounds:
 #: the pixels in ``docs/screenspace.md``, "Pixels that see only their own plane").
 FOOTPRINT_STRIPS = 8
 #: Widening of each strip's extent, relative to the box's width: far above float64 rounding
-#: (1e-16 relative in h^2, 1e-8 in a chord's end where it is a square root), far below a pixel.
+#: (1e-16 relative in h^2, 1e-8 in a chord's end where it is a square root), far below a
+#: pixel. The float32 kernel's ray directions differ from the float64 positions it reads by up
+#: to about 1e-4 pixel, more than this pad for small footprints; what that can cost is said at
+#: :data:`CLEAR_MARGIN`.
 FOOTPRINT_PAD = 1e-6
 
 
@@ -395,10 +398,17 @@ def footprint_rows(px, radius, b_lo, b_hi, a0, a1):
 
 
 #: Margin of :func:`on_one_plane`'s depth tests of other surfaces, relative to |p| + R: far
-#: above the rounding of the kernel's chord ends (z_m +- h; h a square root, 1e-8 relative
+#: above the float64 rounding of the chord's ends (z_m +- h; h a square root, 1e-8 relative
 #: near the ball's rim, where the chord's end lies well inside the ball's depth range) and of
 #: the bilinear depth and the plane's depth along a ray (a few ulps), far below any scene's
-#: detail. It moves the thresholds toward "not exact".
+#: detail. It moves the thresholds toward "not exact". The tests are exact arithmetic's claims
+#: made sound in float64: an exact pixel is never integrated. The float32 kernel
+#: (``_segment_fast._simple_perspective``) rounds a chord's end near the rim by up to about
+#: sqrt(eps32) R, more than this margin, so a pixel the tests would prove may read a value a
+#: rounding away from the closed form in a group; it is then no candidate for the tests of
+#: ``vo_reference`` and is integrated like any other pixel (its value right to that rounding,
+#: its reported standard error tiny instead of 0). Measured: none on the two 1280 x 720 views
+#: of ``benchmarks/bench_groundtruth.py``.
 CLEAR_MARGIN = 1e-6
 #: Texels a side of the grid that :func:`_clear_of_ball` tests in each of a pixel's rectangles,
 #: then in each of its first boxes, before its quadtree: most pixels fail on many texels, and

@@ -99,7 +99,8 @@ class DepthCells:
     fetched depth then carries a relative rounding of a few float32 ulps (under 5e-7, against
     6e-8 for the float32 depths themselves), far inside :data:`~vobscure.screenspace._segment.PLANE_RTOL`
     and the margin :data:`~vobscure.screenspace._segment.CLEAR_MARGIN` of the exact pixels' tests,
-    at about half the cost of the float64 gathers and arithmetic.
+    at about half the cost of the float64 gathers and arithmetic (the float32 chord of
+    :func:`_simple_perspective` is another matter: see ``CLEAR_MARGIN``).
 
     Examples
     --------
