@@ -69,7 +69,7 @@ __all__ = ["ReferenceCache", "CacheWarning", "CacheError", "REFERENCE_CODE_VERSI
 #: Version of the code that computes references (ground truth, G-buffer rendering,
 #: ``vo_reference``). Bump it whenever a change alters their numbers: every cached entry made
 #: before then stops matching and is recomputed.
-REFERENCE_CODE_VERSION = "8"
+REFERENCE_CODE_VERSION = "9"
 #: Layout of an entry file (the provenance fields and array records read back by :meth:`load`).
 CACHE_FORMAT = 1
 #: Environment variable naming the default cache folder.
