@@ -252,3 +252,36 @@ def test_border_bounds_are_the_least_and_greatest_of_each_run(size):
     a, b = np.clip(np.minimum(lo, hi), 0, size - 1), np.clip(np.maximum(lo, hi), 0, size - 1)
     assert np.array_equal(least, [line[x:y + 1].min() for x, y in zip(a, b)])
     assert np.array_equal(most, [line[x:y + 1].max() for x, y in zip(a, b)])
+
+
+@pytest.mark.parametrize("side", ["right", "left", "bottom", "top"])
+def test_past_edge_bounds_hold_every_depth_the_clamped_fetch_reads(side):
+    """The bounds of a box past the image's edge (texel rows i_lo..i_hi, or columns) hold every
+    depth a ray landing past that edge level with the box reads with ``offscreen="clamp"``:
+    the bilinear fetch itself (``_common.fetch_depth``, 1/z interpolated) at positions past the
+    edge whose cell starts at one of the box's rows, against the bounds; background corners
+    read the nearest texel, +inf or a finite one, both within the bounds."""
+    rng = np.random.default_rng(["right", "left", "bottom", "top"].index(side))
+    H, W = 23, 31
+    depth = rng.uniform(1.0, 9.0, (H, W))
+    depth[rng.random((H, W)) < 0.15] = np.inf
+    tables = S.PlaneTables(np.ones((H, W), dtype=np.int64), depth)
+    n = 300
+    along = H if side in ("right", "left") else W
+    lo = rng.integers(0, along, n)
+    hi = np.minimum(lo + rng.integers(0, 5, n), along - 1)
+    zeros = np.zeros(n, dtype=np.intp)
+    if side in ("right", "left"):
+        near, far = S.past_edge_bounds(tables, side, lo, hi, zeros, zeros, "clamp")
+    else:
+        near, far = S.past_edge_bounds(tables, side, zeros, zeros, lo, hi, "clamp")
+    for k in range(8):
+        # a position in the box's span along the edge (its cell starts at one of rows lo..hi)
+        # and 0.1 to 5 pixels past the edge; pixel coordinates with centres at + 1/2
+        t = lo + rng.random(n) * (hi - lo + 1) + 0.5
+        past = rng.uniform(0.1, 5.0, n)
+        x, y = {"right": (W - 0.5 + past, t), "left": (0.5 - past, t),
+                "bottom": (t, H - 0.5 + past), "top": (t, 0.5 - past)}[side]
+        d = Cm.fetch_depth(depth, x, y, fetch="bilinear", offscreen="clamp", reciprocal=True)
+        ok = (d >= near * (1 - 1e-12)) & (d <= far * (1 + 1e-12))
+        assert ok.all(), (side, k, np.flatnonzero(~ok)[:5])

@@ -565,17 +565,22 @@ def _clear_of_ball(px, radius, tables: PlaneTables, sel, rects, overflow=(), off
     return ok
 
 
+def past_edge_bounds(tables: PlaneTables, side, i_lo, i_hi, j_lo, j_hi, offscreen):
+    """(least, greatest) depth that the rays of boxes past the image's edge ``side`` read there
+    (one row per box): the border's texels their clamped cells span (a clamped ray's row and
+    the next, or column), or +inf with ``offscreen="open"``."""
+    if offscreen == "open":
+        return np.full(len(i_lo), np.inf), np.full(len(i_lo), np.inf)
+    if side in ("right", "left"):
+        return tables.border_bounds(side, i_lo, i_hi + 1)
+    return tables.border_bounds(side, j_lo, j_hi + 1)
+
+
 def _past_edge_clear(px, tables: PlaneTables, geometry, side, q, i_lo, i_hi, j_lo, j_hi, offscreen):
     """:func:`_box_clear` of boxes past the image's edge ``side`` (one row per box and its pixel
-    ``q``), with the depths their rays read there: the border's texels their clamped cells span
-    (a clamped ray's row and the next, or column), or +inf with ``offscreen="open"``."""
+    ``q``), with the depths of :func:`past_edge_bounds`."""
     p, n, pp, den, gx, gy, m, RR = geometry
-    if offscreen == "open":
-        near = far = np.full(len(q), np.inf)
-    elif side in ("right", "left"):
-        near, far = tables.border_bounds(side, i_lo, i_hi + 1)
-    else:
-        near, far = tables.border_bounds(side, j_lo, j_hi + 1)
+    near, far = past_edge_bounds(tables, side, i_lo, i_hi, j_lo, j_hi, offscreen)
     return _box_clear(px, p[q], n[q], pp[q], den[q], gx[q], gy[q], m[q], RR, i_lo, i_hi, j_lo, j_hi, near, far)
 
 
