@@ -382,10 +382,13 @@ def bench_screen_reference(quick: bool, threads, report: Report, rounds: int = 1
             wall, cpu = time.perf_counter(), time.process_time()
             out = call()
             return out, time.perf_counter() - wall, time.process_time() - cpu
-        ref, screen_s, screen_cpu = timed(lambda: vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES,
-                                                                  seed=SEED))
-        ao, ao_s, ao_cpu = timed(lambda: vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS,
-                                                         seed=SEED, threads=threads))
+        def screen_call():
+            return vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)
+
+        def ao_call():
+            return vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED, threads=threads)
+        ref, screen_s, screen_cpu = timed(screen_call)
+        ao, ao_s, ao_cpu = timed(ao_call)
         before, before_s, before_cpu = timed(lambda: _reference(
             gb, radius=radius, samples=PREVIOUS_SCREEN_SAMPLES, seed=SEED, along="segment", normal_clamp=False,
             thickness=None, falloff="constant", fetch="bilinear", offscreen="clamp", groups=DEFAULT_GROUPS,
@@ -417,10 +420,8 @@ def bench_screen_reference(quick: bool, threads, report: Report, rounds: int = 1
         report.row(f"ground_truth(quantity='ao', rays={RAYS})", ao_s, pixels * RAYS, None,
                    stderr(ao, ao_cpu))
         walls, cpus = [screen_s / ao_s], [screen_cpu / ao_cpu]
+        calls = [("screen", screen_call), ("ao", ao_call)]
         for k in range(1, rounds):
-            calls = [("screen", lambda: vo.vo_reference(gb, radius=radius, samples=SCREEN_SAMPLES, seed=SEED)),
-                     ("ao", lambda: vo.ground_truth(scene, gb, quantity="ao", radius=radius, rays=RAYS, seed=SEED,
-                                                    threads=threads))]
             times = {name: timed(call)[1:] for name, call in (calls if k % 2 else calls[::-1])}
             walls.append(times["screen"][0] / times["ao"][0])
             cpus.append(times["screen"][1] / times["ao"][1])

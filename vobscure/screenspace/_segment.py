@@ -746,6 +746,8 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
     # integer overflow in the rectangles' corners
     reach = 4 * (H + W)
     edges = np.linspace(0.0, 1.0, int(strips) + 1)
+    # the tests of other surfaces (and of the rays past the image's edge) run after the strips
+    others = clear and tables.near9 is not None
     for s_lo, s_hi in zip(edges[:-1], edges[1:]):
         lo_b = b0 + s_lo * (b1 - b0)
         hi_b = b0 + s_hi * (b1 - b0)
@@ -762,13 +764,12 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
         # beyond the image's edge ``offscreen="clamp"`` repeats the border's depth (not the
         # plane's) and ``"open"`` reads nothing: those rays must be clear of the ball
         out = (x0 < 0) | (y0 < 0) | (x1 > W - 1) | (y1 > H - 1)
-        checkable = offscreen is not None and clear and tables.near9 is not None
-        if not checkable:
+        if not (others and offscreen is not None):
             inside &= ~out
         # the part in the image: the rays that land there read its cells
         c0, c1 = np.clip(x0, 0, W - 1), np.clip(x1, 0, W - 1)
         r0, r1 = np.clip(y0, 0, H - 1), np.clip(y1, 0, H - 1)
-        if clear and tables.near9 is not None:
+        if others:
             one = tables.one_label(label, r0, r1, c0, c1)
         else:
             # the plane-only test: only the pixels still in it need this strip's rectangle
@@ -780,7 +781,7 @@ def on_one_plane(px, radius, tables: PlaneTables, strips: int = FOOTPRINT_STRIPS
         overflow.append((x0, x1, y0, y1, out & inside))
     leaves = np.logical_or.reduce([o[4] for o in overflow])
     ok = inside & plane & ~leaves
-    if clear and tables.near9 is not None:
+    if others:
         sel = np.flatnonzero(inside & ~ok)
         if sel.size:
             ok[sel] = _clear_of_ball(px, radius, tables, sel, [

@@ -218,6 +218,16 @@ def _antiderivative(t, z_m, zz, h2, perspective, quadratic, out):
     return out
 
 
+def _cube_difference(x, y):
+    """x^3 - y^3 as (x - y)(x^2 + x y + y^2): rounded relative to the difference itself (the
+    difference of the cubes would be rounded relative to x^3)."""
+    s = x * x
+    s += x * y
+    s += y * y
+    s *= x - y
+    return s
+
+
 def _depth_terms(z_m, h, zp, d, away, perspective):
     """The control variate's difference along each ray for the default options (constant
     falloff, the whole ball, no thickness), from the depths of the chord's ends z_m -+ h, of the
@@ -227,8 +237,10 @@ def _depth_terms(z_m, h, zp, d, away, perspective):
     times the integral; the caller divides by 3) under perspective, J = 1 orthographically.
     A depth on the plane (within :data:`PLANE_RTOL`) adds exactly 0, as do a depth and a plane
     both beyond one end of the chord (their clipped depths are the same number). ``d`` and
-    ``zp`` are overwritten. The rounding is about eps z / R of the value (cubes of the depths),
-    far below any standard error."""
+    ``zp`` are overwritten. Any float dtype (the float32 path of :func:`_simple_perspective`
+    too): each term is rounded relative to itself (the cubes' differences factored), and the
+    plane's depth is selected by products with 0 and 1, exact for the finite, clipped ends
+    (faster than a masked copy; a NaN depth gives a NaN term, which the caller sets to 0)."""
     z_lo = z_m - h
     z_hi = np.add(z_m, h, out=h)
     zc = np.minimum(np.maximum(zp, z_lo), z_hi)
@@ -239,33 +251,24 @@ def _depth_terms(z_m, h, zp, d, away, perspective):
     zl = np.minimum(np.maximum(d, z_lo), z_hi)
     q = np.subtract(d, zp, out=zp)
     np.abs(q, out=q)
-    # (< rather than <=: a background d = inf is not on the plane)
-    on_plane = q < PLANE_RTOL * d
-    if on_plane.any():
-        np.copyto(zl, zc, where=on_plane)
+    # (< rather than <=: a background d = inf is not on the plane); on the plane the occupied
+    # part starts where the plane does: zl = zc there
+    on = np.less(q, PLANE_RTOL * d).view(np.uint8).astype(zl.dtype)
+    zl *= 1 - on
+    on *= zc
+    zl += on
     if perspective:
-        # Sec. 4.4: (zc^3 - zl^3), or (z_hi^3 + z_lo^3) - zl^3 - zc^3 where away
-        cc = zc * zc
-        cc *= zc
-        ll = np.multiply(zl, zl, out=d)
-        ll *= zl
+        # Sec. 4.4: zc^3 - zl^3, or (z_hi^3 - zc^3) - (zl^3 - z_lo^3) where away
+        out = _cube_difference(zc, zl)
         if away.any():
-            ends = z_hi * z_hi
-            ends *= z_hi
-            lo3 = z_lo * z_lo
-            lo3 *= z_lo
-            ends += lo3
-            ends -= ll
-            ends -= cc
-            out = np.subtract(cc, ll, out=cc)
-            np.copyto(out, ends, where=away)
-            return out
-        return np.subtract(cc, ll, out=cc)
-    if away.any():
-        out = np.subtract(zc, zl)
-        np.copyto(out, (z_hi + z_lo) - zl - zc, where=away)
+            other = _cube_difference(z_hi, zc)
+            other -= _cube_difference(zl, z_lo)
+            out = np.where(away, other, out)
         return out
-    return np.subtract(zc, zl, out=zc)
+    out = np.subtract(zc, zl)
+    if away.any():
+        out = np.where(away, (z_hi + z_lo) - zl - zc, out)
+    return out
 
 
 def _even(z_m, h2, perspective, quadratic):
@@ -449,35 +452,22 @@ def _block(px, sel, a0, da, b0, db, R, unit, normal_clamp, thickness, falloff, c
     return 0.5 - scale * acc / mass
 
 
-def _cube_difference(x, y):
-    """x^3 - y^3 as (x - y)(x^2 + x y + y^2): rounded relative to the difference itself (the
-    difference of the cubes would be rounded relative to x^3)."""
-    s = x * x
-    s += x * y
-    s += y * y
-    s *= x - y
-    return s
-
-
 def _simple_perspective(px, pc, nc, n_p, a0, da, b0, db, R, unit, cells, offscreen, s1, s2, inside):
     """The V of :func:`_block` for the default options (constant falloff, the whole ball, no
-    thickness) under perspective with the bilinear depth of ``cells``: each ray's terms as in
+    thickness) under perspective with the bilinear depth of ``cells``: each ray's terms by
     :func:`_depth_terms`, with the chord, the tangent plane and the terms in float32 (the ray's
     pixel position stays float64, so that the fetched depth and the plane's along the ray meet
     the ray at the same place). A term is rounded relative to itself (cube differences in
     factored form; the chord's half-length from |u x p|, equal by Lagrange's identity to
     |u|^2 |p|^2 - (u . p)^2, which cancels); the sum is float64. The difference from the float64
     kernel stays within the tolerance derived in ``tests/test_screen_reference.py`` (a few
-    float32 ulps of the chord's ends, times z^2 and the box's area over the ball's weight). A depth on
-    the tangent plane (within :data:`PLANE_RTOL`) adds exactly 0, as in :func:`_depth_terms`:
-    the selection multiplies by 0 and 1, exact for the finite, clipped ends (a NaN depth
-    gives a NaN term, set to 0 as in :func:`_block`)."""
+    float32 ulps of the chord's ends, times z^2 and the box's area over the ball's weight). A
+    depth on the tangent plane (within :data:`PLANE_RTOL`) adds exactly 0."""
     f4 = np.float32
     p0, p1, p2 = (q.astype(f4) for q in pc)
     n0, n1, n2 = (q.astype(f4) for q in nc)
     n_p = n_p.astype(f4)
     RR = f4(R * R)
-    rtol = f4(PLANE_RTOL)
     one, zero = f4(1.0), f4(0.0)
     # the ray's pixel position fx = fx0 + u_a fxa, fy = fy0 - u_b fyb (float64)
     fxa = px.fx * da
@@ -542,25 +532,7 @@ def _simple_perspective(px, pc, nc, n_p, a0, da, b0, db, R, unit, cells, offscre
             c1 += n2
             zp = np.divide(n_p, c1, out=t)
             away = c1 > 0          # the half-ball lies beyond the plane along the ray
-            z_lo = z_m - h
-            z_hi = np.add(z_m, h, out=h)
-            zc = np.minimum(np.maximum(zp, z_lo), z_hi)
-            zl = np.minimum(np.maximum(d, z_lo), z_hi)
-            q = np.subtract(d, zp, out=zp)
-            np.abs(q, out=q)
-            # (< rather than <=: a background d = inf is not on the plane); on the plane the
-            # occupied part starts where the plane does: zl = zc there, selected by products
-            # with 0 and 1 (exact for these finite, clipped ends; faster than a masked copy)
-            on = np.less(q, rtol * d).view(np.uint8).astype(f4)
-            zl *= one - on
-            on *= zc
-            zl += on
-            # Sec. 4.4: zc^3 - zl^3, or (z_hi^3 - zc^3) - (zl^3 - z_lo^3) where away
-            contrib = _cube_difference(zc, zl)
-            if away.any():
-                other = _cube_difference(z_hi, zc)
-                other -= _cube_difference(zl, z_lo)
-                contrib = np.where(away, other, contrib)
+            contrib = _depth_terms(z_m, h, zp, d, away, True)
             if not np.isfinite(np.add.reduce(contrib, axis=None)):
                 contrib[~np.isfinite(contrib)] = 0.0
             for row in contrib:

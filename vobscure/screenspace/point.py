@@ -85,10 +85,7 @@ def _ray_vo(gbuffer, *, radius, unit, normal_clamp, thickness, falloff, rng, fet
     if flat is not None:
         # the exact pixels take the closed form; only the others are integrated
         index = index[~flat.reshape(-1)[index]]
-    if fast:
-        parts = balanced_parts(index, SEGMENT_CHUNK_PIXELS)
-    else:
-        parts = [index[a:a + C.CHUNK_PIXELS] for a in range(0, len(index), C.CHUNK_PIXELS)]
+    parts = balanced_parts(index, SEGMENT_CHUNK_PIXELS if fast else C.CHUNK_PIXELS)
 
     def run(ix):
         return segments(C.prepare(gb, radius, index=ix, depth64=depth64))
@@ -131,8 +128,7 @@ def _exact_pixels(gbuffer, radius, tables: PlaneTables, offscreen: str = "clamp"
         index = index[candidates.reshape(-1)[index]]
     # the tests of other surfaces hold a row per box of texels per pixel (thousands for a large
     # footprint): smaller chunks keep their memory near the plane-only test's
-    chunk = C.CHUNK_PIXELS if not clear else EXACT_CHUNK_PIXELS
-    parts = [index[a:a + chunk] for a in range(0, len(index), chunk)]
+    parts = balanced_parts(index, C.CHUNK_PIXELS if not clear else EXACT_CHUNK_PIXELS)
 
     def run(ix):
         px = C.prepare(gb, radius, index=ix, depth64=depth64)
@@ -682,7 +678,8 @@ def _reference(gbuffer, *, radius, samples, normal_clamp, thickness, falloff, se
                           offscreen=offscreen, noise_size=64).astype(np.float64)
         if k <= 2 and exact is not None:
             # An exact pixel's every ray adds exactly 0 to the control variate's difference, so
-            # each of its groups reads the closed form bit for bit (tests/test_screen_reference_exact.py):
+            # each of its groups reads the closed form bit for bit (tests/test_screen_reference_exact.py;
+            # the float32 kernel's rounding can spoil that near a ball's rim: _segment.CLEAR_MARGIN):
             # only the pixels whose first two groups read it can be exact, and only they are
             # given the costlier test of the other surfaces in their footprint (the same set as
             # testing every pixel; after two groups rather than one, since a test costs several
